@@ -1,0 +1,110 @@
+//! Proposals: how a candidate `y` is drawn from the current state `x`.
+//!
+//! A proposal reports the log transition ratio `ln q(x|y) − ln q(y|x)` of the candidate it drew
+//! (zero for a symmetric proposal, `ln q(x) − ln q(y)` for an independence sampler) together with a
+//! *kind*, the index of the move type that produced it, so acceptance can be reported per move type.
+
+use crate::ChainRng;
+
+/// What a proposal reports with its candidate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Proposed {
+    /// `ln q(x|y) − ln q(y|x)`: the log ratio of reverse to forward transition densities.
+    pub ln_ratio: f64,
+    /// Index of the move type that produced the candidate (see [`Proposal::kinds`]).
+    pub kind: usize,
+}
+
+impl Proposed {
+    /// A symmetric move of kind 0.
+    pub const SYMMETRIC: Proposed = Proposed {
+        ln_ratio: 0.0,
+        kind: 0,
+    };
+
+    /// A move of kind 0 with the given log ratio.
+    pub fn with_ratio(ln_ratio: f64) -> Self {
+        Self { ln_ratio, kind: 0 }
+    }
+}
+
+/// A transition kernel `q(y|x)` that draws candidates.
+///
+/// `propose` writes the candidate into `y`, which holds a previous state of the same shape (kernels
+/// reuse buffers; a proposal must overwrite every part of `y` it relies on).
+pub trait Proposal<S> {
+    /// Draw `y ~ q(·|x)` and report `ln q(x|y) − ln q(y|x)`.
+    fn propose(&self, x: &S, y: &mut S, rng: &mut ChainRng) -> Proposed;
+
+    /// `ln q(to|from)` when the proposal can evaluate it (needed by the combined mixture rule and by
+    /// the pointwise balance check); `None` otherwise.
+    fn ln_transition_density(&self, from: &S, to: &S) -> Option<f64> {
+        let _ = (from, to);
+        None
+    }
+
+    /// For proposals with finitely many outcomes from `x`: every outcome with its probability and
+    /// what [`Proposal::propose`] reports for it. Used by the exact balance checks on finite state
+    /// spaces ([`crate::balance::finite`]); `None` otherwise.
+    fn outcomes(&self, x: &S) -> Option<Vec<Outcome<S>>> {
+        let _ = x;
+        None
+    }
+
+    /// Names of the move types this proposal reports, indexed by [`Proposed::kind`].
+    fn kinds(&self) -> Vec<String> {
+        let full = std::any::type_name::<Self>();
+        let short = full.split('<').next().unwrap_or(full);
+        vec![short.rsplit("::").next().unwrap_or(short).to_string()]
+    }
+}
+
+impl<S, P: Proposal<S> + ?Sized> Proposal<S> for &P {
+    fn propose(&self, x: &S, y: &mut S, rng: &mut ChainRng) -> Proposed {
+        (**self).propose(x, y, rng)
+    }
+    fn ln_transition_density(&self, from: &S, to: &S) -> Option<f64> {
+        (**self).ln_transition_density(from, to)
+    }
+    fn outcomes(&self, x: &S) -> Option<Vec<Outcome<S>>> {
+        (**self).outcomes(x)
+    }
+    fn kinds(&self) -> Vec<String> {
+        (**self).kinds()
+    }
+}
+
+impl<S, P: Proposal<S> + ?Sized> Proposal<S> for Box<P> {
+    fn propose(&self, x: &S, y: &mut S, rng: &mut ChainRng) -> Proposed {
+        (**self).propose(x, y, rng)
+    }
+    fn ln_transition_density(&self, from: &S, to: &S) -> Option<f64> {
+        (**self).ln_transition_density(from, to)
+    }
+    fn outcomes(&self, x: &S) -> Option<Vec<Outcome<S>>> {
+        (**self).outcomes(x)
+    }
+    fn kinds(&self) -> Vec<String> {
+        (**self).kinds()
+    }
+}
+
+/// One possible result of a proposal with finitely many outcomes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outcome<S> {
+    /// The candidate.
+    pub state: S,
+    /// Its probability given the current state.
+    pub probability: f64,
+    /// What the proposal reports when it draws it.
+    pub proposed: Proposed,
+}
+
+/// A normalised distribution that can be sampled exactly and whose density can be evaluated:
+/// the proposal of an independence sampler, or the exact law a balance check draws from.
+pub trait Density<S> {
+    /// Draw a state into `out`.
+    fn sample(&self, rng: &mut ChainRng, out: &mut S);
+    /// Log density of `x` (with respect to the same reference measure as the target).
+    fn ln_pdf(&self, x: &S) -> f64;
+}

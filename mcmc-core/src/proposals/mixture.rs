@@ -1,0 +1,237 @@
+//! Mixtures of proposals `q(y|x) = Σ_k P_k q_k(y|x)` with the two transition rules of the papers.
+//!
+//! * [`MixtureRule::PerComponent`]: accept with the chosen component's own ratio
+//!   `q_k(x|y) / q_k(y|x)`. The step is then a random-scan mixture of Metropolis–Hastings kernels,
+//!   each reversible on its own, so the mixture is reversible — provided every component reports
+//!   its own exact ratio. It never evaluates the other components (cheap).
+//! * [`MixtureRule::Combined`]: accept with `Σ_k P_k q_k(x|y) / Σ_k P_k q_k(y|x)` (Veach's expected
+//!   transition density; Fan et al.'s Metropolis photon sampling eq. 4). Needed when a component
+//!   cannot reverse its own move — a user-path proposal that could never regenerate the current
+//!   path, or a pair of directional moves that are only symmetric together — because the other
+//!   components may generate the reverse move. Every component must then evaluate
+//!   [`Proposal::ln_transition_density`].
+
+use crate::error::check_positive;
+use crate::{ChainRng, McmcError, Outcome, Proposal, Proposed, rng::uniform};
+
+/// Which transition-density rule a [`Mixture`] reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MixtureRule {
+    /// The chosen component's own ratio.
+    PerComponent,
+    /// The ratio of the full mixture densities `Σ P_k q_k`.
+    Combined,
+}
+
+type Component<S> = Box<dyn Proposal<S> + Send + Sync>;
+
+/// A state-independent mixture of proposals.
+pub struct Mixture<S> {
+    components: Vec<Component<S>>,
+    ln_weights: Vec<f64>,
+    cumulative: Vec<f64>,
+    kind_offsets: Vec<usize>,
+    rule: MixtureRule,
+}
+
+impl<S> std::fmt::Debug for Mixture<S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Mixture")
+            .field("kinds", &self.kinds_inner())
+            .field("weights", &self.weights())
+            .field("rule", &self.rule)
+            .finish()
+    }
+}
+
+impl<S> Mixture<S> {
+    /// A mixture of `(weight, proposal)` pairs; weights are normalised. With the combined rule every
+    /// component must evaluate its transition density (checked on a probe state is impossible in
+    /// general, so it is checked on first use and reported as [`McmcError::MissingTransitionDensity`]
+    /// by [`Mixture::check_combined`]).
+    pub fn new(components: Vec<(f64, Component<S>)>, rule: MixtureRule) -> Result<Self, McmcError> {
+        if components.is_empty() {
+            return Err(McmcError::InvalidParameter {
+                name: "components",
+                reason: "a mixture needs at least one component".into(),
+            });
+        }
+        let total: f64 = components.iter().map(|c| c.0).sum();
+        for c in &components {
+            if !(c.0.is_finite() && c.0 >= 0.0) {
+                return Err(McmcError::InvalidParameter {
+                    name: "weight",
+                    reason: format!("mixture weights must be finite and non-negative, got {}", c.0),
+                });
+            }
+        }
+        check_positive("total weight", total)?;
+        let mut cumulative = Vec::with_capacity(components.len());
+        let mut ln_weights = Vec::with_capacity(components.len());
+        let mut kind_offsets = Vec::with_capacity(components.len());
+        let mut acc = 0.0;
+        let mut offset = 0;
+        let mut comps = Vec::with_capacity(components.len());
+        for (w, p) in components {
+            acc += w / total;
+            cumulative.push(acc);
+            ln_weights.push((w / total).ln());
+            kind_offsets.push(offset);
+            offset += p.kinds().len();
+            comps.push(p);
+        }
+        Ok(Self {
+            components: comps,
+            ln_weights,
+            cumulative,
+            kind_offsets,
+            rule,
+        })
+    }
+
+    /// Check, on a pair of states, that every component evaluates its transition density, as the
+    /// combined rule requires.
+    pub fn check_combined(&self, x: &S, y: &S) -> Result<(), McmcError> {
+        for c in &self.components {
+            if c.ln_transition_density(x, y).is_none() {
+                return Err(McmcError::MissingTransitionDensity {
+                    component: c.kinds().join("+"),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Normalised selection probabilities `P_k`.
+    pub fn weights(&self) -> Vec<f64> {
+        self.ln_weights.iter().map(|l| l.exp()).collect()
+    }
+
+    /// The rule.
+    pub fn rule(&self) -> MixtureRule {
+        self.rule
+    }
+
+    fn kinds_inner(&self) -> Vec<String> {
+        self.components.iter().flat_map(|c| c.kinds()).collect()
+    }
+
+    fn choose(&self, rng: &mut ChainRng) -> usize {
+        let u = uniform(rng);
+        self.cumulative
+            .iter()
+            .position(|&c| u < c)
+            .unwrap_or(self.components.len() - 1)
+    }
+
+    /// `ln Σ_k P_k q_k(to|from)`, or `None` when a component cannot evaluate it.
+    pub fn ln_mixture_density(&self, from: &S, to: &S) -> Option<f64> {
+        let mut terms = Vec::with_capacity(self.components.len());
+        for (c, lw) in self.components.iter().zip(&self.ln_weights) {
+            terms.push(lw + c.ln_transition_density(from, to)?);
+        }
+        Some(log_sum_exp(&terms))
+    }
+}
+
+/// `ln Σ exp(t_i)`, exact for `-inf` terms.
+pub fn log_sum_exp(terms: &[f64]) -> f64 {
+    let m = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if m == f64::NEG_INFINITY || m.is_nan() {
+        return m;
+    }
+    if m == f64::INFINITY {
+        return m;
+    }
+    m + terms.iter().map(|t| (t - m).exp()).sum::<f64>().ln()
+}
+
+impl<S> Mixture<S> {
+    /// What the mixture reports for a candidate `y` drawn from `x` by component `k`.
+    fn report(&self, k: usize, x: &S, y: &S, p: Proposed) -> Proposed {
+        let ln_ratio = match self.rule {
+            MixtureRule::PerComponent => p.ln_ratio,
+            MixtureRule::Combined => match (
+                self.ln_mixture_density(y, x),
+                self.ln_mixture_density(x, y),
+            ) {
+                (Some(rev), Some(fwd)) => rev - fwd,
+                _ => f64::NAN, // counted and rejected by the kernel; see `check_combined`
+            },
+        };
+        Proposed {
+            ln_ratio,
+            kind: self.kind_offsets[k] + p.kind,
+        }
+    }
+}
+
+impl<S> Proposal<S> for Mixture<S> {
+    fn propose(&self, x: &S, y: &mut S, rng: &mut ChainRng) -> Proposed {
+        let k = self.choose(rng);
+        let p = self.components[k].propose(x, y, rng);
+        self.report(k, x, y, p)
+    }
+
+    fn outcomes(&self, x: &S) -> Option<Vec<Outcome<S>>> {
+        let mut out = Vec::new();
+        for (k, (c, lw)) in self.components.iter().zip(&self.ln_weights).enumerate() {
+            for o in c.outcomes(x)? {
+                let proposed = self.report(k, x, &o.state, o.proposed);
+                out.push(Outcome {
+                    probability: lw.exp() * o.probability,
+                    state: o.state,
+                    proposed,
+                });
+            }
+        }
+        Some(out)
+    }
+
+    fn ln_transition_density(&self, from: &S, to: &S) -> Option<f64> {
+        self.ln_mixture_density(from, to)
+    }
+
+    fn kinds(&self) -> Vec<String> {
+        self.kinds_inner()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::proposals::GaussianRandomWalk;
+
+    #[test]
+    fn log_sum_exp_handles_infinities() {
+        assert_eq!(log_sum_exp(&[f64::NEG_INFINITY, f64::NEG_INFINITY]), f64::NEG_INFINITY);
+        assert!((log_sum_exp(&[0.0, 0.0]) - 2f64.ln()).abs() < 1e-15);
+        assert!((log_sum_exp(&[-1000.0, -1000.0]) - (-1000.0 + 2f64.ln())).abs() < 1e-12);
+    }
+
+    #[test]
+    fn kinds_are_concatenated_and_weights_normalised() {
+        let m: Mixture<Vec<f64>> = Mixture::new(
+            vec![
+                (3.0, Box::new(GaussianRandomWalk::new(0.1).unwrap())),
+                (1.0, Box::new(GaussianRandomWalk::new(1.0).unwrap())),
+            ],
+            MixtureRule::Combined,
+        )
+        .unwrap();
+        assert_eq!(m.kinds().len(), 2);
+        let w = m.weights();
+        assert!((w[0] - 0.75).abs() < 1e-15 && (w[1] - 0.25).abs() < 1e-15);
+        assert!(m.check_combined(&vec![0.0], &vec![1.0]).is_ok());
+    }
+
+    #[test]
+    fn invalid_weights_are_refused() {
+        let bad: Result<Mixture<Vec<f64>>, _> = Mixture::new(
+            vec![(f64::NAN, Box::new(GaussianRandomWalk::new(0.1).unwrap()))],
+            MixtureRule::PerComponent,
+        );
+        assert!(bad.is_err());
+        assert!(Mixture::<Vec<f64>>::new(vec![], MixtureRule::Combined).is_err());
+    }
+}

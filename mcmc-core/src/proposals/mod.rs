@@ -1,0 +1,11 @@
+//! Ready-made proposals.
+
+mod independence;
+mod mixture;
+mod random_walk;
+mod unit_cube;
+
+pub use independence::{Independence, UniformCube};
+pub use mixture::{Mixture, MixtureRule};
+pub use random_walk::GaussianRandomWalk;
+pub use unit_cube::{CubeWalk, SmallStep};
