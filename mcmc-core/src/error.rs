@@ -14,13 +14,17 @@ pub enum McmcError {
         reason: String,
     },
     /// A chain was started where the target is zero, NaN or infinite.
-    #[error("initial state has log density {ln_density}; a chain must start where the target is positive and finite")]
+    #[error(
+        "initial state has log density {ln_density}; a chain must start where the target is positive and finite"
+    )]
     BadInitialState {
         /// The offending log density.
         ln_density: f64,
     },
     /// The combined mixture rule needs every component to evaluate its transition density.
-    #[error("mixture component `{component}` cannot evaluate its transition density, which the combined rule needs")]
+    #[error(
+        "mixture component `{component}` cannot evaluate its transition density, which the combined rule needs"
+    )]
     MissingTransitionDensity {
         /// The component's name.
         component: String,

@@ -172,7 +172,9 @@ impl<T, P> MetropolisHastings<T, P> {
 impl<S, T: Target<S>, P: Proposal<S>> Kernel<S> for MetropolisHastings<T, P> {
     #[inline]
     fn step<O: Observer<S>>(&mut self, chain: &mut Chain<S>, rng: &mut ChainRng, observer: &mut O) {
-        let p = self.proposal.propose(&chain.state, &mut chain.candidate, rng);
+        let p = self
+            .proposal
+            .propose(&chain.state, &mut chain.candidate, rng);
         let l = self.target.evaluate(&mut chain.candidate);
         chain.decide(l, p.ln_ratio, p.kind, rng, observer);
     }
@@ -214,7 +216,13 @@ mod tests {
 
     #[test]
     fn invalid_candidates_are_counted_and_rejected() {
-        let target = |x: &Vec<f64>| if x[0] > 0.5 { f64::NAN } else { -0.5 * x[0] * x[0] };
+        let target = |x: &Vec<f64>| {
+            if x[0] > 0.5 {
+                f64::NAN
+            } else {
+                -0.5 * x[0] * x[0]
+            }
+        };
         let mut chain = Chain::start(&target, vec![0.0]).unwrap();
         let mut mh = MetropolisHastings::new(
             target,

@@ -72,4 +72,4 @@ pub use kernel::{Chain, FnObserver, Kernel, MetropolisHastings, Observer};
 pub use proposal::{Density, Outcome, Proposal, Proposed};
 pub use rng::ChainRng;
 pub use stats::{KindStats, Stats};
-pub use target::{FnFamily, Family, Level, Target, Tempered};
+pub use target::{Family, FnFamily, Level, Target, Tempered};

@@ -43,6 +43,16 @@ pub trait Proposal<S> {
         None
     }
 
+    /// `ln q(to, kind | from)`: the density of drawing `to` by a move of `kind`, on the space in
+    /// which the reported ratio is exact, i.e. `Proposed::ln_ratio = ln_move_density(to, from, kind)
+    /// − ln_move_density(from, to, kind)`. It equals [`Proposal::ln_transition_density`] unless the
+    /// kind is an auxiliary variable of the move: a per-component mixture reports `ln P_k +
+    /// ln q_k(to|from)` (its ratio is exact on the space extended by the component index).
+    fn ln_move_density(&self, from: &S, to: &S, kind: usize) -> Option<f64> {
+        let _ = kind;
+        self.ln_transition_density(from, to)
+    }
+
     /// For proposals with finitely many outcomes from `x`: every outcome with its probability and
     /// what [`Proposal::propose`] reports for it. Used by the exact balance checks on finite state
     /// spaces ([`crate::balance::finite`]); `None` otherwise.
@@ -66,6 +76,9 @@ impl<S, P: Proposal<S> + ?Sized> Proposal<S> for &P {
     fn ln_transition_density(&self, from: &S, to: &S) -> Option<f64> {
         (**self).ln_transition_density(from, to)
     }
+    fn ln_move_density(&self, from: &S, to: &S, kind: usize) -> Option<f64> {
+        (**self).ln_move_density(from, to, kind)
+    }
     fn outcomes(&self, x: &S) -> Option<Vec<Outcome<S>>> {
         (**self).outcomes(x)
     }
@@ -80,6 +93,9 @@ impl<S, P: Proposal<S> + ?Sized> Proposal<S> for Box<P> {
     }
     fn ln_transition_density(&self, from: &S, to: &S) -> Option<f64> {
         (**self).ln_transition_density(from, to)
+    }
+    fn ln_move_density(&self, from: &S, to: &S, kind: usize) -> Option<f64> {
+        (**self).ln_move_density(from, to, kind)
     }
     fn outcomes(&self, x: &S) -> Option<Vec<Outcome<S>>> {
         (**self).outcomes(x)

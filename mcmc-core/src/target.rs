@@ -44,14 +44,7 @@ pub trait Family<S> {
     /// Green ratio of this re-parameterisation (zero when all levels share one state space, the
     /// default: `y = x`). A chart family re-parameterises the point through the stochastic inverse of
     /// chart `to` and returns `ln p_to(x̄) − ln p_from(x̄)`; see the `mcmc-charts` crate.
-    fn transfer(
-        &self,
-        from: usize,
-        to: usize,
-        x: &S,
-        y: &mut S,
-        rng: &mut crate::ChainRng,
-    ) -> f64
+    fn transfer(&self, from: usize, to: usize, x: &S, y: &mut S, rng: &mut crate::ChainRng) -> f64
     where
         S: Clone,
     {
@@ -170,14 +163,7 @@ impl<S, F: Family<S> + ?Sized> Family<S> for &F {
     fn ln_density(&self, level: usize, x: &mut S) -> f64 {
         (**self).ln_density(level, x)
     }
-    fn transfer(
-        &self,
-        from: usize,
-        to: usize,
-        x: &S,
-        y: &mut S,
-        rng: &mut crate::ChainRng,
-    ) -> f64
+    fn transfer(&self, from: usize, to: usize, x: &S, y: &mut S, rng: &mut crate::ChainRng) -> f64
     where
         S: Clone,
     {

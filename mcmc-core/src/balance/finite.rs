@@ -129,14 +129,14 @@ impl TransitionMatrix {
             let mut stack = vec![root];
             seen[root] = true;
             while let Some(i) = stack.pop() {
-                for j in 0..n {
+                for (j, s) in seen.iter_mut().enumerate() {
                     let p = if forward {
                         self.p[i * n + j]
                     } else {
                         self.p[j * n + i]
                     };
-                    if p > 0.0 && !seen[j] {
-                        seen[j] = true;
+                    if p > 0.0 && !*s {
+                        *s = true;
                         stack.push(j);
                     }
                 }
@@ -188,9 +188,9 @@ pub fn mh_matrix<T: Target<usize>, P: Proposal<usize>>(
 ) -> Result<TransitionMatrix, McmcError> {
     let mut m = TransitionMatrix::zeros(n);
     for x in 0..n {
-        let outs = proposal.outcomes(&x).ok_or_else(|| {
-            McmcError::Check("the proposal cannot enumerate its outcomes".into())
-        })?;
+        let outs = proposal
+            .outcomes(&x)
+            .ok_or_else(|| McmcError::Check("the proposal cannot enumerate its outcomes".into()))?;
         let lx = target.ln_density(&x);
         let mut stay = 1.0;
         for o in outs {
@@ -243,11 +243,7 @@ impl TableProposal {
     }
 
     fn q(&self, x: usize, y: usize) -> f64 {
-        self.rows[x]
-            .iter()
-            .filter(|e| e.0 == y)
-            .map(|e| e.1)
-            .sum()
+        self.rows[x].iter().filter(|e| e.0 == y).map(|e| e.1).sum()
     }
 }
 

@@ -35,8 +35,9 @@ pub fn identity_gap(forward: Side, backward: Side) -> f64 {
 }
 
 /// Check a Metropolis–Hastings proposal at `pairs` drawn from `starts`: for each start `x`, draw
-/// `y` with [`Proposal::propose`], evaluate `q(y|x)` and `q(x|y)` with
-/// [`Proposal::ln_transition_density`], and verify (a) the reported ratio equals
+/// `y` with [`Proposal::propose`], evaluate `q(y|x)` and `q(x|y)` for a move of the reported kind
+/// with [`Proposal::ln_move_density`] (the extended space when the kind is an auxiliary variable,
+/// as in per-component mixtures), and verify (a) the reported ratio equals
 /// `ln q(x|y) − ln q(y|x)` and (b) the identity holds with the kernel's acceptance function, taking
 /// the reverse move's report to be the negated forward report. `tolerance` is in log space.
 pub fn check_proposal<S: Clone, T: Target<S>, P: Proposal<S>>(
@@ -53,8 +54,8 @@ pub fn check_proposal<S: Clone, T: Target<S>, P: Proposal<S>>(
         let mut y = x.clone();
         let p = proposal.propose(x, &mut y, rng);
         let (Some(q_xy), Some(q_yx)) = (
-            proposal.ln_transition_density(x, &y),
-            proposal.ln_transition_density(&y, x),
+            proposal.ln_move_density(x, &y, p.kind),
+            proposal.ln_move_density(&y, x, p.kind),
         ) else {
             return Err(crate::McmcError::Check(
                 "the proposal cannot evaluate its transition density".into(),

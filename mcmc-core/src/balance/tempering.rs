@@ -55,8 +55,14 @@ pub fn expected_swap_acceptance<S: Clone, F: Family<S>>(
     for _ in 0..draws {
         let mut x = exact(k, rng);
         let mut z = exact(k + 1, rng);
-        let (lxk, lzk1) = (family.ln_density(k, &mut x), family.ln_density(k + 1, &mut z));
-        let (lzk, lxk1) = (family.ln_density(k, &mut z), family.ln_density(k + 1, &mut x));
+        let (lxk, lzk1) = (
+            family.ln_density(k, &mut x),
+            family.ln_density(k + 1, &mut z),
+        );
+        let (lzk, lxk1) = (
+            family.ln_density(k, &mut z),
+            family.ln_density(k + 1, &mut x),
+        );
         let a = crate::kernel::acceptance(lxk + lzk1, lzk + lxk1, 0.0).0;
         sum += a;
         sum2 += a * a;

@@ -87,7 +87,7 @@ pub fn ess_chains(chains: &[&[f64]]) -> f64 {
     let w = mean(&vars);
     let b_over_n = if m > 1 { variance(&means) } else { 0.0 };
     let var_plus = (n as f64 - 1.0) / n as f64 * w + b_over_n;
-    if !(var_plus > 0.0) {
+    if var_plus.is_nan() || var_plus <= 0.0 {
         return f64::NAN;
     }
     let acfs: Vec<Vec<f64>> = chains.iter().map(|c| autocorrelation(&c[..n])).collect();
@@ -151,7 +151,10 @@ mod tests {
             let x = ar1(a, 200_000, 10 + i as u64);
             let tau = integrated_autocorrelation_time(&x);
             let want = (1.0 + a) / (1.0 - a);
-            assert!((tau / want - 1.0).abs() < 0.1, "a = {a}: tau {tau}, want {want}");
+            assert!(
+                (tau / want - 1.0).abs() < 0.1,
+                "a = {a}: tau {tau}, want {want}"
+            );
             let e = ess(&x);
             assert!((e / (200_000.0 / want) - 1.0).abs() < 0.1);
         }

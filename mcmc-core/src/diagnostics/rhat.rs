@@ -43,7 +43,7 @@ pub fn rhat(chains: &[&[f64]]) -> f64 {
     }
     let means: Vec<f64> = chains.iter().map(|c| mean(&c[..n])).collect();
     let w = mean(&chains.iter().map(|c| variance(&c[..n])).collect::<Vec<_>>());
-    if !(w > 0.0) {
+    if w.is_nan() || w <= 0.0 {
         return f64::NAN;
     }
     let b_over_n = variance(&means);

@@ -61,7 +61,10 @@ impl<S> Mixture<S> {
             if !(c.0.is_finite() && c.0 >= 0.0) {
                 return Err(McmcError::InvalidParameter {
                     name: "weight",
-                    reason: format!("mixture weights must be finite and non-negative, got {}", c.0),
+                    reason: format!(
+                        "mixture weights must be finite and non-negative, got {}",
+                        c.0
+                    ),
                 });
             }
         }
@@ -151,13 +154,12 @@ impl<S> Mixture<S> {
     fn report(&self, k: usize, x: &S, y: &S, p: Proposed) -> Proposed {
         let ln_ratio = match self.rule {
             MixtureRule::PerComponent => p.ln_ratio,
-            MixtureRule::Combined => match (
-                self.ln_mixture_density(y, x),
-                self.ln_mixture_density(x, y),
-            ) {
-                (Some(rev), Some(fwd)) => rev - fwd,
-                _ => f64::NAN, // counted and rejected by the kernel; see `check_combined`
-            },
+            MixtureRule::Combined => {
+                match (self.ln_mixture_density(y, x), self.ln_mixture_density(x, y)) {
+                    (Some(rev), Some(fwd)) => rev - fwd,
+                    _ => f64::NAN, // counted and rejected by the kernel; see `check_combined`
+                }
+            }
         };
         Proposed {
             ln_ratio,
@@ -171,6 +173,18 @@ impl<S> Proposal<S> for Mixture<S> {
         let k = self.choose(rng);
         let p = self.components[k].propose(x, y, rng);
         self.report(k, x, y, p)
+    }
+
+    fn ln_move_density(&self, from: &S, to: &S, kind: usize) -> Option<f64> {
+        match self.rule {
+            MixtureRule::Combined => self.ln_mixture_density(from, to),
+            MixtureRule::PerComponent => {
+                let k = self.kind_offsets.partition_point(|&o| o <= kind) - 1;
+                let own =
+                    self.components[k].ln_move_density(from, to, kind - self.kind_offsets[k])?;
+                Some(self.ln_weights[k] + own)
+            }
+        }
     }
 
     fn outcomes(&self, x: &S) -> Option<Vec<Outcome<S>>> {
@@ -204,7 +218,10 @@ mod tests {
 
     #[test]
     fn log_sum_exp_handles_infinities() {
-        assert_eq!(log_sum_exp(&[f64::NEG_INFINITY, f64::NEG_INFINITY]), f64::NEG_INFINITY);
+        assert_eq!(
+            log_sum_exp(&[f64::NEG_INFINITY, f64::NEG_INFINITY]),
+            f64::NEG_INFINITY
+        );
         assert!((log_sum_exp(&[0.0, 0.0]) - 2f64.ln()).abs() < 1e-15);
         assert!((log_sum_exp(&[-1000.0, -1000.0]) - (-1000.0 + 2f64.ln())).abs() < 1e-12);
     }

@@ -61,7 +61,11 @@ impl SmallStep {
         let d = match *self {
             SmallStep::Exponential { s1, s2 } => {
                 let mag = s2 * (-(s2 / s1).ln() * uniform(rng)).exp();
-                if rand::Rng::next_u32(rng) & 1 == 0 { mag } else { -mag }
+                if rand::Rng::next_u32(rng) & 1 == 0 {
+                    mag
+                } else {
+                    -mag
+                }
             }
             SmallStep::Gaussian { sigma } => {
                 let e: f64 = rng.sample(StandardNormal);

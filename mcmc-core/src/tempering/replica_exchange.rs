@@ -186,9 +186,13 @@ impl<S: Clone, F: Family<S>, K: Kernel<S>> ReplicaExchange<S, F, K> {
     pub fn swap_candidates(&mut self, k: usize, rng: &mut ChainRng) -> (f64, f64, f64) {
         let (lo, hi) = self.chains.split_at_mut(k + 1);
         let (a, b) = (&mut lo[k], &mut hi[0]);
-        let g1 = self.family.transfer(k + 1, k, &b.state, &mut a.candidate, rng);
+        let g1 = self
+            .family
+            .transfer(k + 1, k, &b.state, &mut a.candidate, rng);
         let l1 = self.family.ln_density(k, &mut a.candidate);
-        let g2 = self.family.transfer(k, k + 1, &a.state, &mut b.candidate, rng);
+        let g2 = self
+            .family
+            .transfer(k, k + 1, &a.state, &mut b.candidate, rng);
         let l2 = self.family.ln_density(k + 1, &mut b.candidate);
         let (p, _invalid) =
             crate::kernel::acceptance(a.ln_density + b.ln_density, l1 + l2, g1 + g2);

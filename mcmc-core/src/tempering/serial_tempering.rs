@@ -208,7 +208,10 @@ impl<S: Clone, F: Family<S>, K: Kernel<S>> SerialTempering<S, F, K> {
             .transfer(k, j, &self.chain.state, &mut self.chain.candidate, rng);
         let l = self.family.ln_density(j, &mut self.chain.candidate);
         let ln_ratio = g + self.ln_weights[j] - self.ln_weights[k] + ln_q;
-        (crate::kernel::acceptance(self.chain.ln_density, l, ln_ratio).0, l)
+        (
+            crate::kernel::acceptance(self.chain.ln_density, l, ln_ratio).0,
+            l,
+        )
     }
 
     /// Fraction of post-warm-up steps spent at each level.
