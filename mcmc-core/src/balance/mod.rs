@@ -105,6 +105,11 @@ pub fn holm(p: &[f64]) -> Vec<f64> {
     adj
 }
 
+/// Two-sided normal tail `P(|Z| ≥ z)`.
+pub fn normal_two_sided(z: f64) -> f64 {
+    statrs::function::erf::erfc(z.abs() / std::f64::consts::SQRT_2)
+}
+
 /// Upper tail `P(χ²_df ≥ stat)`.
 pub fn chi_square_sf(stat: f64, df: usize) -> f64 {
     if df == 0 {

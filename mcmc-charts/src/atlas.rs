@@ -1,0 +1,184 @@
+//! An atlas: the family of charts a charted chain may move between, optionally with the identity
+//! chart (`U = Ω`, `p = 1`), which lets target-space moves (e.g. path-space mutations) join the
+//! family; then `p = 1` also enters the denominator of the weighted targets (paper §4).
+
+use crate::Chart;
+use mcmc_core::ChainRng;
+
+/// A chain state of charted Metropolis–Hastings: a chart index, its primary coordinates, and the
+/// cached target-space point with what was evaluated there.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ChartState<X> {
+    /// Index of the chart the state lives in ([`Atlas::identity`] for target space).
+    pub chart: usize,
+    /// Primary coordinates (empty in the identity chart).
+    pub u: Vec<f64>,
+    /// The point `T_chart(u)` (only meaningful when `valid`).
+    pub x: X,
+    /// Whether `x` is a point (the forward map succeeded).
+    pub valid: bool,
+    /// Whether `x`, `importance` and `ln_p` are up to date with `u`.
+    pub fresh: bool,
+    /// The scalar importance `f*(x)` the chain samples.
+    pub importance: f64,
+    /// `ln p_k(x)` for every chart `k` of the atlas (0 for the identity chart).
+    pub ln_p: Vec<f64>,
+}
+
+impl<X: Default> ChartState<X> {
+    /// A state in chart `chart` at primary coordinates `u` (evaluated on first use).
+    pub fn in_chart(chart: usize, u: Vec<f64>) -> Self {
+        Self {
+            chart,
+            u,
+            ..Default::default()
+        }
+    }
+}
+
+impl<X> ChartState<X> {
+    /// A state in target space (the identity chart of `atlas`) at `x`.
+    pub fn at_point<Y>(atlas: &Atlas<Y>, x: X) -> Self {
+        Self {
+            chart: atlas.identity(),
+            u: Vec::new(),
+            x,
+            valid: true,
+            fresh: false,
+            importance: 0.0,
+            ln_p: Vec::new(),
+        }
+    }
+}
+
+type BoxedChart<X> = Box<dyn Chart<X>>;
+
+/// A family of sampling charts of one target space.
+pub struct Atlas<X> {
+    charts: Vec<BoxedChart<X>>,
+    with_identity: bool,
+}
+
+impl<X> std::fmt::Debug for Atlas<X> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Atlas")
+            .field("charts", &self.charts.iter().map(|c| c.name()).collect::<Vec<_>>())
+            .field("with_identity", &self.with_identity)
+            .finish()
+    }
+}
+
+impl<X> Atlas<X> {
+    /// An atlas of `charts` (no identity chart).
+    pub fn new(charts: Vec<BoxedChart<X>>) -> Self {
+        Self {
+            charts,
+            with_identity: false,
+        }
+    }
+
+    /// Add the identity chart as level [`Atlas::identity`] (= number of charts).
+    pub fn with_identity(mut self) -> Self {
+        self.with_identity = true;
+        self
+    }
+
+    /// Number of levels: charts, plus one for the identity chart if present.
+    pub fn levels(&self) -> usize {
+        self.charts.len() + self.with_identity as usize
+    }
+
+    /// Number of (non-identity) charts.
+    pub fn charts(&self) -> usize {
+        self.charts.len()
+    }
+
+    /// The chart at `index` (`None` for the identity level).
+    pub fn chart(&self, index: usize) -> Option<&dyn Chart<X>> {
+        self.charts.get(index).map(|c| c.as_ref())
+    }
+
+    /// Whether the identity chart is part of the atlas.
+    pub fn has_identity(&self) -> bool {
+        self.with_identity
+    }
+
+    /// The index of the identity chart (equal to [`Atlas::charts`]; valid as a level only when the
+    /// atlas has it, but always usable as the index of target-space states).
+    pub fn identity(&self) -> usize {
+        self.charts.len()
+    }
+
+    /// Name of a level.
+    pub fn name(&self, level: usize) -> String {
+        self.chart(level)
+            .map(|c| c.name())
+            .unwrap_or_else(|| "identity".into())
+    }
+
+    /// Primary dimension of a level (0 for the identity chart).
+    pub fn dim(&self, level: usize) -> usize {
+        self.chart(level).map(|c| c.dim()).unwrap_or(0)
+    }
+
+    /// `ln p_level(x)` (0 for the identity chart).
+    pub fn ln_density(&self, level: usize, x: &X) -> f64 {
+        self.chart(level).map(|c| c.ln_density(x)).unwrap_or(0.0)
+    }
+
+    /// Fill `ln_p` with `ln p_k(x)` for every level.
+    pub fn ln_densities(&self, x: &X, ln_p: &mut Vec<f64>) {
+        ln_p.clear();
+        ln_p.extend(self.charts.iter().map(|c| c.ln_density(x)));
+        if self.with_identity {
+            ln_p.push(0.0);
+        }
+    }
+
+    /// Re-parameterise the point of `from` in chart `to`: `to.u ~ R_to(x)`, copying the cached
+    /// evaluation. Returns the Green ratio `ln p_to(x) − ln p_from(x) + ln λ_from(u) − ln λ_to(u')`
+    /// (λ: the charts' inverse biases), or `-inf` when the point is not in the image of `to`.
+    pub fn reparameterise(
+        &self,
+        from: &ChartState<X>,
+        to_chart: usize,
+        to: &mut ChartState<X>,
+        rng: &mut ChainRng,
+    ) -> f64
+    where
+        X: Clone,
+    {
+        to.chart = to_chart;
+        to.x.clone_from(&from.x);
+        to.valid = from.valid;
+        to.fresh = from.fresh;
+        to.importance = from.importance;
+        to.ln_p.clone_from(&from.ln_p);
+        let dim = self.dim(to_chart);
+        to.u.resize(dim, 0.0);
+        if !from.valid {
+            return f64::NEG_INFINITY;
+        }
+        let ln_p_to = self.ln_density(to_chart, &from.x);
+        let ln_p_from = self.ln_density(from.chart, &from.x);
+        if ln_p_to == f64::NEG_INFINITY {
+            to.valid = false;
+            return f64::NEG_INFINITY;
+        }
+        if let Some(c) = self.chart(to_chart)
+            && !c.invert(&from.x, &mut to.u, rng)
+        {
+            to.valid = false;
+            return f64::NEG_INFINITY;
+        }
+        let bias_from = self
+            .chart(from.chart)
+            .map(|c| c.ln_inverse_bias(&from.x, &from.u))
+            .unwrap_or(0.0);
+        let bias_to = self
+            .chart(to_chart)
+            .map(|c| c.ln_inverse_bias(&from.x, &to.u))
+            .unwrap_or(0.0);
+        ln_p_to - ln_p_from + bias_from - bias_to
+    }
+}
