@@ -37,7 +37,7 @@ impl Grid {
         let u = (p[0] - self.x.0) / (self.x.1 - self.x.0);
         let v = (p[1] - self.y.0) / (self.y.1 - self.y.0);
         let inside = (0.0..1.0).contains(&u) && (0.0..1.0).contains(&v);
-        inside.then(|| ((u * self.nx as f64) as usize, (v * self.ny as f64) as usize))
+        inside.then_some(((u * self.nx as f64) as usize, (v * self.ny as f64) as usize))
     }
 
     fn centre(&self, i: usize, j: usize) -> [f64; 2] {

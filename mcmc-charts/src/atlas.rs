@@ -62,7 +62,10 @@ pub struct Atlas<X> {
 impl<X> std::fmt::Debug for Atlas<X> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Atlas")
-            .field("charts", &self.charts.iter().map(|c| c.name()).collect::<Vec<_>>())
+            .field(
+                "charts",
+                &self.charts.iter().map(|c| c.name()).collect::<Vec<_>>(),
+            )
             .field("with_identity", &self.with_identity)
             .finish()
     }

@@ -215,8 +215,14 @@ fn uniformity(inverted: &[Vec<f64>], reference: &[Vec<f64>], d: usize, alpha: f6
     }
     for i in 0..d {
         for j in i + 1..d {
-            let a: Vec<usize> = inverted.iter().map(|u| bin(u[i], 8) * 8 + bin(u[j], 8)).collect();
-            let b: Vec<usize> = reference.iter().map(|u| bin(u[i], 8) * 8 + bin(u[j], 8)).collect();
+            let a: Vec<usize> = inverted
+                .iter()
+                .map(|u| bin(u[i], 8) * 8 + bin(u[j], 8))
+                .collect();
+            let b: Vec<usize> = reference
+                .iter()
+                .map(|u| bin(u[i], 8) * 8 + bin(u[j], 8))
+                .collect();
             let (s, df) = homogeneity(&a, &b, 64);
             tests.push((format!("(u[{i}], u[{j}])"), chi_square_sf(s, df)));
         }

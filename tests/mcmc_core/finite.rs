@@ -80,7 +80,7 @@ proptest! {
         let n = pi.len();
         let target = ln_pi(&pi);
         for rule in [MixtureRule::PerComponent, MixtureRule::Combined] {
-            let mix: Mixture<usize> = Mixture::new(vec![
+            let mix: Mixture<'_, usize> = Mixture::new(vec![
                 (w, Box::new(TableProposal::new(r1.clone()).unwrap()) as _),
                 (1.0 - w, Box::new(TableProposal::new(r2.clone()).unwrap()) as _),
             ], rule).unwrap();
@@ -103,7 +103,7 @@ fn directional_moves_need_the_combined_rule() {
         .unwrap()
         .treated_as_symmetric();
     let target = ln_pi(&pi);
-    let mk = |rule| -> Mixture<usize> {
+    let mk = |rule| -> Mixture<'_, usize> {
         Mixture::new(
             vec![
                 (0.7, Box::new(up.clone()) as _),

@@ -146,3 +146,42 @@ fn serial_tempering_adapts_weights_to_equal_time() {
     }
     assert!(st.round_trips.total() > 100);
 }
+
+/// A level whose density is NaN in part of the space: swaps into it are rejected and counted as
+/// invalid, never accepted, and the counters stay finite.
+#[test]
+fn invalid_swaps_are_counted_and_rejected() {
+    let fam = FnFamily::new(2, |k: usize, x: &Vec<f64>| {
+        if k == 1 && x[0] > 1.0 {
+            f64::NAN
+        } else {
+            -0.5 * x[0] * x[0]
+        }
+    });
+    let kernels: Vec<_> = (0..2)
+        .map(|k| {
+            MetropolisHastings::new(
+                Level {
+                    family: &fam,
+                    level: k,
+                },
+                GaussianRandomWalk::new(1.0).unwrap(),
+            )
+        })
+        .collect();
+    let mut re = ReplicaExchange::new(
+        &fam,
+        kernels,
+        vec![vec![0.0]; 2],
+        SwapSchedule::StochasticEvenOdd,
+    )
+    .unwrap();
+    let mut rng = stream(2, 0);
+    for _ in 0..5000 {
+        re.sweep(&mut rng, &mut ());
+        assert!(re.chains[1].state[0] <= 1.0);
+    }
+    let s = re.swaps[0];
+    assert!(s.invalid > 50, "{s:?}");
+    assert!(s.acceptance_sum.is_finite() && s.accepted > 0);
+}

@@ -38,7 +38,12 @@ impl<X: Clone, P: Proposal<Vec<f64>>> Proposal<ChartState<X>> for InChart<P> {
         self.proposal.ln_transition_density(&from.u, &to.u)
     }
 
-    fn ln_move_density(&self, from: &ChartState<X>, to: &ChartState<X>, kind: usize) -> Option<f64> {
+    fn ln_move_density(
+        &self,
+        from: &ChartState<X>,
+        to: &ChartState<X>,
+        kind: usize,
+    ) -> Option<f64> {
         if from.chart != to.chart {
             return Some(f64::NEG_INFINITY);
         }

@@ -48,6 +48,8 @@
 
 mod in_chart;
 mod ipsm;
+mod target_space;
 
 pub use in_chart::InChart;
 pub use ipsm::InversePerturbation;
+pub use target_space::TargetSpace;

@@ -23,18 +23,18 @@ pub enum MixtureRule {
     Combined,
 }
 
-type Component<S> = Box<dyn Proposal<S> + Send + Sync>;
+type Component<'a, S> = Box<dyn Proposal<S> + Send + Sync + 'a>;
 
 /// A state-independent mixture of proposals.
-pub struct Mixture<S> {
-    components: Vec<Component<S>>,
+pub struct Mixture<'a, S> {
+    components: Vec<Component<'a, S>>,
     ln_weights: Vec<f64>,
     cumulative: Vec<f64>,
     kind_offsets: Vec<usize>,
     rule: MixtureRule,
 }
 
-impl<S> std::fmt::Debug for Mixture<S> {
+impl<S> std::fmt::Debug for Mixture<'_, S> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Mixture")
             .field("kinds", &self.kinds_inner())
@@ -44,12 +44,15 @@ impl<S> std::fmt::Debug for Mixture<S> {
     }
 }
 
-impl<S> Mixture<S> {
+impl<'a, S> Mixture<'a, S> {
     /// A mixture of `(weight, proposal)` pairs; weights are normalised. With the combined rule every
     /// component must evaluate its transition density (checked on a probe state is impossible in
     /// general, so it is checked on first use and reported as [`McmcError::MissingTransitionDensity`]
     /// by [`Mixture::check_combined`]).
-    pub fn new(components: Vec<(f64, Component<S>)>, rule: MixtureRule) -> Result<Self, McmcError> {
+    pub fn new(
+        components: Vec<(f64, Component<'a, S>)>,
+        rule: MixtureRule,
+    ) -> Result<Self, McmcError> {
         if components.is_empty() {
             return Err(McmcError::InvalidParameter {
                 name: "components",
@@ -149,7 +152,7 @@ pub fn log_sum_exp(terms: &[f64]) -> f64 {
     m + terms.iter().map(|t| (t - m).exp()).sum::<f64>().ln()
 }
 
-impl<S> Mixture<S> {
+impl<S> Mixture<'_, S> {
     /// What the mixture reports for a candidate `y` drawn from `x` by component `k`.
     fn report(&self, k: usize, x: &S, y: &S, p: Proposed) -> Proposed {
         let ln_ratio = match self.rule {
@@ -168,7 +171,7 @@ impl<S> Mixture<S> {
     }
 }
 
-impl<S> Proposal<S> for Mixture<S> {
+impl<S> Proposal<S> for Mixture<'_, S> {
     fn propose(&self, x: &S, y: &mut S, rng: &mut ChainRng) -> Proposed {
         let k = self.choose(rng);
         let p = self.components[k].propose(x, y, rng);
@@ -228,7 +231,7 @@ mod tests {
 
     #[test]
     fn kinds_are_concatenated_and_weights_normalised() {
-        let m: Mixture<Vec<f64>> = Mixture::new(
+        let m: Mixture<'_, Vec<f64>> = Mixture::new(
             vec![
                 (3.0, Box::new(GaussianRandomWalk::new(0.1).unwrap())),
                 (1.0, Box::new(GaussianRandomWalk::new(1.0).unwrap())),
@@ -244,11 +247,11 @@ mod tests {
 
     #[test]
     fn invalid_weights_are_refused() {
-        let bad: Result<Mixture<Vec<f64>>, _> = Mixture::new(
+        let bad: Result<Mixture<'_, Vec<f64>>, _> = Mixture::new(
             vec![(f64::NAN, Box::new(GaussianRandomWalk::new(0.1).unwrap()))],
             MixtureRule::PerComponent,
         );
         assert!(bad.is_err());
-        assert!(Mixture::<Vec<f64>>::new(vec![], MixtureRule::Combined).is_err());
+        assert!(Mixture::<'_, Vec<f64>>::new(vec![], MixtureRule::Combined).is_err());
     }
 }

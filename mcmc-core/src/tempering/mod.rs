@@ -20,6 +20,8 @@ pub struct PairStats {
     pub accepted: u64,
     /// Sum of acceptance probabilities.
     pub acceptance_sum: f64,
+    /// Moves rejected because a density or ratio was NaN or `+inf`.
+    pub invalid: u64,
 }
 
 impl PairStats {
@@ -31,9 +33,17 @@ impl PairStats {
     pub fn mean_acceptance(&self) -> f64 {
         self.acceptance_sum / self.attempted as f64
     }
-    pub(crate) fn record(&mut self, a: f64, accepted: bool) {
+    /// Add another counter (e.g. of another chain).
+    pub fn merge(&mut self, o: &PairStats) {
+        self.attempted += o.attempted;
+        self.accepted += o.accepted;
+        self.acceptance_sum += o.acceptance_sum;
+        self.invalid += o.invalid;
+    }
+    pub(crate) fn record(&mut self, a: f64, accepted: bool, invalid: bool) {
         self.attempted += 1;
         self.accepted += accepted as u64;
         self.acceptance_sum += a;
+        self.invalid += invalid as u64;
     }
 }

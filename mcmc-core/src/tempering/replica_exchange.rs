@@ -166,8 +166,11 @@ impl<S: Clone, F: Family<S>, K: Kernel<S>> ReplicaExchange<S, F, K> {
     /// Propose swapping the replicas at levels `k` and `k+1`; returns whether it was accepted.
     pub fn try_swap(&mut self, k: usize, rng: &mut ChainRng) -> bool {
         let (p, l1, l2) = self.swap_candidates(k, rng);
-        let accepted = p >= 1.0 || (p > 0.0 && uniform(rng) < p);
-        self.swaps[k].record(p, accepted);
+        let invalid = [p, l1, l2]
+            .iter()
+            .any(|v| v.is_nan() || *v == f64::INFINITY);
+        let accepted = !invalid && (p >= 1.0 || (p > 0.0 && uniform(rng) < p));
+        self.swaps[k].record(if invalid { 0.0 } else { p }, accepted, invalid);
         if accepted {
             let (lo, hi) = self.chains.split_at_mut(k + 1);
             let (a, b) = (&mut lo[k], &mut hi[0]);
@@ -181,7 +184,8 @@ impl<S: Clone, F: Family<S>, K: Kernel<S>> ReplicaExchange<S, F, K> {
     }
 
     /// Write the swap candidates of pair `(k, k+1)` into the chains' candidate buffers and return
-    /// `(acceptance probability, ln π_k(y_k), ln π_{k+1}(y_{k+1}))`. Exposed so the exact finite-space
+    /// `(acceptance probability, ln π_k(y_k), ln π_{k+1}(y_{k+1}))`; the probability is NaN when a
+    /// density or Green ratio was NaN or `+inf` (the swap is then rejected and counted as invalid). Exposed so the exact finite-space
     /// checks enumerate the same computation the sampler runs.
     pub fn swap_candidates(&mut self, k: usize, rng: &mut ChainRng) -> (f64, f64, f64) {
         let (lo, hi) = self.chains.split_at_mut(k + 1);
@@ -194,9 +198,9 @@ impl<S: Clone, F: Family<S>, K: Kernel<S>> ReplicaExchange<S, F, K> {
             .family
             .transfer(k, k + 1, &a.state, &mut b.candidate, rng);
         let l2 = self.family.ln_density(k + 1, &mut b.candidate);
-        let (p, _invalid) =
-            crate::kernel::acceptance(a.ln_density + b.ln_density, l1 + l2, g1 + g2);
-        (p, l1, l2)
+        let (p, invalid) = crate::kernel::acceptance(a.ln_density + b.ln_density, l1 + l2, g1 + g2);
+        // An invalid swap is reported with a NaN probability so `try_swap` can count it.
+        (if invalid { f64::NAN } else { p }, l1, l2)
     }
 
     /// Number of swap rounds done.

@@ -187,8 +187,9 @@ impl<S: Clone, F: Family<S>, K: Kernel<S>> SerialTempering<S, F, K> {
             return false;
         }
         let (a, l) = self.level_candidate(j, ln_q, rng);
-        let accepted = a >= 1.0 || (a > 0.0 && uniform(rng) < a);
-        self.level_moves[k * n + j].record(a, accepted);
+        let invalid = a.is_nan();
+        let accepted = !invalid && (a >= 1.0 || (a > 0.0 && uniform(rng) < a));
+        self.level_moves[k * n + j].record(if invalid { 0.0 } else { a }, accepted, invalid);
         if accepted {
             std::mem::swap(&mut self.chain.state, &mut self.chain.candidate);
             self.chain.ln_density = l;
@@ -199,7 +200,7 @@ impl<S: Clone, F: Family<S>, K: Kernel<S>> SerialTempering<S, F, K> {
     }
 
     /// Write the candidate of a move to level `j` into the chain's candidate buffer and return
-    /// `(acceptance probability, ln π_j(candidate))`, where `ln_q = ln q(k|j) − ln q(j|k)` is the
+    /// `(acceptance probability, ln π_j(candidate))` (NaN probability: invalid), where `ln_q = ln q(k|j) − ln q(j|k)` is the
     /// level proposal's ratio. Exposed for the exact finite-space checks.
     pub fn level_candidate(&mut self, j: usize, ln_q: f64, rng: &mut ChainRng) -> (f64, f64) {
         let k = self.level;
