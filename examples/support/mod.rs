@@ -101,7 +101,7 @@ pub fn write_heatmaps(
 }
 
 /// A viridis-like ramp from dark purple (0) through teal to yellow (1).
-fn colour(t: f64) -> Rgb<u8> {
+pub fn colour(t: f64) -> Rgb<u8> {
     const RAMP: [[f64; 3]; 9] = [
         [68.0, 1.0, 84.0],
         [71.0, 44.0, 122.0],

@@ -1,1 +1,14 @@
-//! Placeholder: filled by issue 4.
+//! # light-transport
+//!
+//! Scenes, ray tracing, materials and path sampling for a research renderer whose Metropolis
+//! integrators are built on `mcmc-core` and `mcmc-charts`.
+
+pub mod bsdf;
+pub mod error;
+pub mod math;
+pub mod sampler;
+pub mod scene;
+pub mod spectrum;
+
+pub use error::{Error, Result};
+pub use spectrum::Rgb;

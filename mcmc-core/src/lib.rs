@@ -59,6 +59,7 @@ pub mod diagnostics;
 mod ensemble;
 mod error;
 pub mod kernel;
+pub mod population;
 mod proposal;
 pub mod proposals;
 pub mod rng;

@@ -1,0 +1,252 @@
+//! Sample streams: every path is a deterministic function of the numbers it reads from one stream.
+//!
+//! # Layout
+//!
+//! A stream has three *substreams*, selected with [`SampleStream::start_stream`]; each is read
+//! sequentially from index 0 and path construction reads them in a fixed order:
+//!
+//! | substream | vertex | numbers |
+//! |---|---|---|
+//! | [`CAMERA_STREAM`] | camera endpoint | film position (2), lens position (2) |
+//! | | each further camera-subpath vertex `i ≥ 1` | [`VERTEX_BLOCK`] = 4: lobe choice (1), direction (2), Russian roulette (1) |
+//! | [`LIGHT_STREAM`] | light endpoint | light choice (1), position on the light (2), emitted direction (2) |
+//! | | each further light-subpath vertex | [`VERTEX_BLOCK`] = 4, as above |
+//! | [`TECHNIQUE_STREAM`] | integrator choices | technique choice (MMLT), light choice for next-event estimation and its position (3) |
+//!
+//! The Russian-roulette number is read only when roulette is enabled; otherwise it is a free
+//! coordinate (inverses fill it uniformly). Numbers are always consumed block by block so that the
+//! `i`-th vertex always reads the same positions: this is what lets Kelemen mutations perturb a
+//! vertex in place and lets path inversion write a vertex's numbers back.
+//!
+//! Implementations: [`IndependentStream`] (fresh random numbers), [`ReplayStream`] (a given vector
+//! per substream — chart forward maps), and [`Recorder`] (wraps a stream and keeps what was read).
+
+use mcmc_core::ChainRng;
+use mcmc_core::rng::uniform;
+
+/// Substream of the camera subpath.
+pub const CAMERA_STREAM: usize = 0;
+/// Substream of the light subpath.
+pub const LIGHT_STREAM: usize = 1;
+/// Substream of integrator-level choices (technique, next-event light).
+pub const TECHNIQUE_STREAM: usize = 2;
+/// Number of substreams.
+pub const STREAMS: usize = 3;
+/// Numbers per scattering vertex.
+pub const VERTEX_BLOCK: usize = 4;
+/// Numbers of the camera endpoint.
+pub const CAMERA_BLOCK: usize = 4;
+/// Numbers of the light endpoint.
+pub const LIGHT_BLOCK: usize = 5;
+
+/// A source of numbers in `[0, 1)` organised in substreams.
+pub trait SampleStream {
+    /// Continue reading substream `index` (each substream remembers its position).
+    fn start_stream(&mut self, index: usize);
+    /// The next number of the current substream.
+    fn next_1d(&mut self) -> f64;
+    /// The next two numbers.
+    fn next_2d(&mut self) -> [f64; 2] {
+        [self.next_1d(), self.next_1d()]
+    }
+    /// Skip to position `index` of the current substream (used to keep vertex blocks aligned).
+    fn seek(&mut self, index: usize);
+    /// Position in the current substream.
+    fn position(&self) -> usize;
+}
+
+impl<S: SampleStream + ?Sized> SampleStream for &mut S {
+    fn start_stream(&mut self, index: usize) {
+        (**self).start_stream(index)
+    }
+    fn next_1d(&mut self) -> f64 {
+        (**self).next_1d()
+    }
+    fn next_2d(&mut self) -> [f64; 2] {
+        (**self).next_2d()
+    }
+    fn seek(&mut self, index: usize) {
+        (**self).seek(index)
+    }
+    fn position(&self) -> usize {
+        (**self).position()
+    }
+}
+
+/// Fresh independent numbers from a [`ChainRng`]; positions are tracked (skipped numbers are
+/// simply not drawn), so the stream is a valid "replayable" source for statistics but not for
+/// replay.
+#[derive(Clone, Debug)]
+pub struct IndependentStream {
+    /// The generator.
+    pub rng: ChainRng,
+    current: usize,
+    pos: [usize; STREAMS],
+}
+
+impl IndependentStream {
+    /// A stream drawing from `rng`.
+    pub fn new(rng: ChainRng) -> Self {
+        Self {
+            rng,
+            current: 0,
+            pos: [0; STREAMS],
+        }
+    }
+
+    /// Reset positions for a new sample (numbers stay fresh).
+    pub fn new_sample(&mut self) {
+        self.pos = [0; STREAMS];
+        self.current = 0;
+    }
+}
+
+impl SampleStream for IndependentStream {
+    fn start_stream(&mut self, index: usize) {
+        self.current = index;
+    }
+    fn next_1d(&mut self) -> f64 {
+        self.pos[self.current] += 1;
+        uniform(&mut self.rng)
+    }
+    fn seek(&mut self, index: usize) {
+        self.pos[self.current] = index;
+    }
+    fn position(&self) -> usize {
+        self.pos[self.current]
+    }
+}
+
+/// Replays given vectors, one per substream. Reading past the end of a vector returns a fresh
+/// number from the fallback generator and marks the stream as *exhausted* (a fixed-dimension chart
+/// forward map must never do that; [`ReplayStream::exhausted`] reports it).
+#[derive(Clone, Debug)]
+pub struct ReplayStream<'a> {
+    data: [&'a [f64]; STREAMS],
+    current: usize,
+    pos: [usize; STREAMS],
+    exhausted: bool,
+}
+
+impl<'a> ReplayStream<'a> {
+    /// Replay `camera`, `light` and `technique` numbers.
+    pub fn new(camera: &'a [f64], light: &'a [f64], technique: &'a [f64]) -> Self {
+        Self {
+            data: [camera, light, technique],
+            current: 0,
+            pos: [0; STREAMS],
+            exhausted: false,
+        }
+    }
+
+    /// Whether any read went past the end of its vector (it then read 0.5).
+    pub fn exhausted(&self) -> bool {
+        self.exhausted
+    }
+}
+
+impl SampleStream for ReplayStream<'_> {
+    fn start_stream(&mut self, index: usize) {
+        self.current = index;
+    }
+    fn next_1d(&mut self) -> f64 {
+        let i = self.pos[self.current];
+        self.pos[self.current] += 1;
+        match self.data[self.current].get(i) {
+            Some(&v) => v,
+            None => {
+                self.exhausted = true;
+                0.5
+            }
+        }
+    }
+    fn seek(&mut self, index: usize) {
+        self.pos[self.current] = index;
+    }
+    fn position(&self) -> usize {
+        self.pos[self.current]
+    }
+}
+
+/// Wraps a stream and records every number read, by substream and position (positions that were
+/// skipped hold NaN).
+#[derive(Clone, Debug)]
+pub struct Recorder<S> {
+    /// The wrapped stream.
+    pub inner: S,
+    /// What was read, per substream.
+    pub recorded: [Vec<f64>; STREAMS],
+    current: usize,
+}
+
+impl<S: SampleStream> Recorder<S> {
+    /// Record what `inner` produces.
+    pub fn new(inner: S) -> Self {
+        Self {
+            inner,
+            recorded: Default::default(),
+            current: 0,
+        }
+    }
+}
+
+impl<S: SampleStream> SampleStream for Recorder<S> {
+    fn start_stream(&mut self, index: usize) {
+        self.current = index;
+        self.inner.start_stream(index);
+    }
+    fn next_1d(&mut self) -> f64 {
+        let i = self.inner.position();
+        let v = self.inner.next_1d();
+        let r = &mut self.recorded[self.current];
+        if r.len() <= i {
+            r.resize(i + 1, f64::NAN);
+        }
+        r[i] = v;
+        v
+    }
+    fn seek(&mut self, index: usize) {
+        self.inner.seek(index)
+    }
+    fn position(&self) -> usize {
+        self.inner.position()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mcmc_core::rng::stream;
+
+    #[test]
+    fn replaying_a_recording_reproduces_the_numbers() {
+        let mut rec = Recorder::new(IndependentStream::new(stream(1, 0)));
+        let mut read = Vec::new();
+        for s in [CAMERA_STREAM, LIGHT_STREAM, CAMERA_STREAM] {
+            rec.start_stream(s);
+            read.push(rec.next_1d());
+            read.push(rec.next_1d());
+        }
+        let [c, l, t] = &rec.recorded;
+        let mut replay = ReplayStream::new(c, l, t);
+        let mut again = Vec::new();
+        for s in [CAMERA_STREAM, LIGHT_STREAM, CAMERA_STREAM] {
+            replay.start_stream(s);
+            again.push(replay.next_1d());
+            again.push(replay.next_1d());
+        }
+        assert_eq!(read, again);
+        assert!(!replay.exhausted());
+        replay.next_1d();
+        assert!(replay.exhausted());
+    }
+
+    #[test]
+    fn seek_keeps_blocks_aligned() {
+        let v: Vec<f64> = (0..12).map(|i| i as f64 / 12.0).collect();
+        let mut r = ReplayStream::new(&v, &[], &[]);
+        r.next_1d();
+        r.seek(VERTEX_BLOCK);
+        assert_eq!(r.next_1d(), v[4]);
+    }
+}

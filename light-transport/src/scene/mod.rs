@@ -1,0 +1,5 @@
+//! Scenes: the description model, loaders, built-in scenes, and the renderable scene.
+
+pub mod description;
+
+pub use description::*;
