@@ -8,8 +8,9 @@
 
 use rand::SeedableRng;
 
-/// The random number generator used by every kernel of this crate (ChaCha8, portable and cloneable).
-pub type ChainRng = rand::rngs::ChaCha8Rng;
+/// The random number generator used by every kernel of this crate (ChaCha8 from `rand_chacha`:
+/// portable, seedable, and cloneable so a chain's stream can be snapshot and resumed).
+pub type ChainRng = rand_chacha::ChaCha8Rng;
 
 /// The generator for stream `index` of `master_seed`.
 ///
@@ -56,6 +57,14 @@ mod tests {
         assert!(a.windows(2).all(|w| w[0] == w[1]));
         assert_ne!(stream(1, 0).next_u64(), stream(2, 0).next_u64());
         assert_ne!(substream(1, 1, 0).next_u64(), substream(1, 2, 0).next_u64());
+    }
+
+    #[test]
+    fn a_cloned_stream_continues_identically() {
+        let mut a = stream(5, 9);
+        a.next_u64();
+        let mut b = a.clone();
+        assert_eq!(a.next_u64(), b.next_u64());
     }
 
     #[test]

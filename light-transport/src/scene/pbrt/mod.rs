@@ -1,0 +1,1 @@
+//! pbrt-v3 scene-format loader (in progress).
