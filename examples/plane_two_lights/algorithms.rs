@@ -17,7 +17,7 @@ use mcmc_charts::{Atlas, ChartState, ChartedTarget, TargetKind};
 use mcmc_core::population::systematic_resample;
 use mcmc_core::proposals::{CubeWalk, Independence, Mixture, MixtureRule, SmallStep, UniformCube};
 use mcmc_core::rng::uniform;
-use mcmc_core::tempering::{LevelObserver, ReplicaExchange, SwapSchedule};
+use mcmc_core::tempering::{LevelObserver, LevelProposal, ReplicaExchange, SerialTempering, SwapSchedule};
 use mcmc_core::{Chain, ChainRng, Family, Kernel, Level, MetropolisHastings, Observer};
 
 pub type State = ChartState<Path>;
@@ -32,6 +32,10 @@ pub enum Algorithm {
     PssmltMix,
     CmltIpsm,
     Cmlt,
+    /// Not in the paper's table: one chain over (chart, u) with chart swaps by serial tempering
+    /// (equal pseudo-priors), so time is split between the charts in proportion to their energy
+    /// instead of evenly.
+    CmltSt,
     /// CMLT whose chart swaps forget the chart densities `p_j/p_i` (deliberately broken). Its
     /// image stays nearly unbiased: accepting every swap makes both chains sample about the same
     /// mixture, and the recording weights `b_i` of the two chains sum to `∫ f*`; the per-chart
@@ -43,6 +47,7 @@ pub enum Algorithm {
 }
 
 impl Algorithm {
+    /// The six algorithms of the paper's Table 1.
     pub const ALL: [Algorithm; 6] = [
         Algorithm::Pssmlt1,
         Algorithm::Pssmlt2,
@@ -50,6 +55,16 @@ impl Algorithm {
         Algorithm::PssmltMix,
         Algorithm::CmltIpsm,
         Algorithm::Cmlt,
+    ];
+    /// The paper's six and the serial-tempering variant.
+    pub const WITH_ST: [Algorithm; 7] = [
+        Algorithm::Pssmlt1,
+        Algorithm::Pssmlt2,
+        Algorithm::PssmltAvg,
+        Algorithm::PssmltMix,
+        Algorithm::CmltIpsm,
+        Algorithm::Cmlt,
+        Algorithm::CmltSt,
     ];
     pub fn name(&self) -> &'static str {
         match self {
@@ -59,6 +74,7 @@ impl Algorithm {
             Algorithm::PssmltMix => "PSSMLT-MIX",
             Algorithm::CmltIpsm => "CMLT-IPSM",
             Algorithm::Cmlt => "CMLT",
+            Algorithm::CmltSt => "CMLT-ST",
             Algorithm::CmltBrokenSwap => "CMLT-BROKEN-SWAP",
             Algorithm::CmltIpsmBroken => "CMLT-IPSM-BROKEN",
         }
@@ -261,6 +277,21 @@ pub fn run(alg: Algorithm, n: usize, norm: &Normalisation, rng: &mut ChainRng) -
                 through[i % 2].step(&mut chain, rng, &mut r);
             }
             Run { image: r.image, acceptance: chain.stats.total().acceptance_rate(), swap_acceptance: None }
+        }
+        Algorithm::CmltSt => {
+            // Start in a chart chosen in proportion to its energy.
+            let k = (uniform(rng) * norm.b > norm.b_chart[0]) as usize;
+            let init = seed_state(&weighted, k, 100_000, rng);
+            let kernels: Vec<_> = (0..2).map(|k| MetropolisHastings::new(Level { family: &weighted, level: k }, InChart::new(pssmlt_kernel()))).collect();
+            let mut st = SerialTempering::new(&weighted, kernels, init, k, None, LevelProposal::Independent(vec![0.5, 0.5])).expect("two charts");
+            st.local_steps = 4;
+            // The joint target Σ_i π̄_i = f: every step records with the full normalisation.
+            let mut r = Recorder::new([norm.b / n as f64; 2], None, 0);
+            for _ in 0..n / 4 {
+                st.step(rng, &mut r);
+            }
+            let moves: (u64, u64) = st.level_moves.iter().fold((0, 0), |a, m| (a.0 + m.attempted, a.1 + m.accepted));
+            Run { image: r.image, acceptance: st.chain.stats.total().acceptance_rate(), swap_acceptance: Some(moves.1 as f64 / moves.0 as f64) }
         }
         Algorithm::Cmlt | Algorithm::CmltBrokenSwap => {
             let init = vec![seed_state(&weighted, 0, 100_000, rng), seed_state(&weighted, 1, 100_000, rng)];
