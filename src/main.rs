@@ -1,4 +1,14 @@
-//! The `charted` command line (filled in by issue 4).
+//! `charted`: render scenes with unbiased and Metropolis light transport, compare algorithms at
+//! equal time, and merge partial renders.
+
+mod cli;
+
+use clap::Parser;
+
 fn main() {
-    println!("charted: the renderer CLI arrives with the light-transport crate");
+    let args = cli::Cli::parse();
+    if let Err(e) = cli::run(args) {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
 }

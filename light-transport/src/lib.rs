@@ -3,9 +3,16 @@
 //! Scenes, ray tracing, materials and path sampling for a research renderer whose Metropolis
 //! integrators are built on `mcmc-core` and `mcmc-charts`.
 
+pub mod accel;
 pub mod bsdf;
+pub mod camera;
+pub mod geometry;
+pub mod integrators;
+pub mod light;
 pub mod error;
+pub mod film;
 pub mod math;
+pub mod path;
 pub mod sampler;
 pub mod scene;
 pub mod spectrum;

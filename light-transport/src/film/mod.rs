@@ -1,0 +1,163 @@
+//! The film: f64 accumulation of per-pixel estimates and of splats, merged deterministically.
+//!
+//! Camera-based estimators (path tracing, the `t ≥ 2` strategies of BDPT) add one estimate per
+//! camera sample to its pixel; the pixel's value is the mean of its estimates. Light-based
+//! estimators (light tracing, `t = 1` strategies, Metropolis recording) *splat* anywhere; the splat
+//! buffer is divided by [`Film::splat_scale`], the number of splatting samples per pixel
+//! (`total samples / (W·H)`), which matches the camera importance's normalisation (a pixel's value
+//! is `W·H` times its share of the film's measurement). Non-finite values are rejected and counted,
+//! never accumulated.
+
+mod colormap;
+mod metrics;
+mod output;
+
+pub use colormap::false_colour;
+pub use metrics::{ErrorMetrics, error_image, metrics};
+pub use output::{read_image, srgb_encode, write_bytes_png, write_exr, write_png};
+
+use crate::spectrum::Rgb;
+
+/// An image under accumulation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Film {
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+    pixel_sum: Vec<Rgb>,
+    pixel_count: Vec<f64>,
+    splat_sum: Vec<Rgb>,
+    /// Number of splatting samples per pixel the splat buffer is divided by (0: no splats).
+    pub splat_scale: f64,
+    /// Samples rejected because they were NaN or infinite.
+    pub discarded: u64,
+}
+
+impl Film {
+    /// An empty film.
+    pub fn new(width: usize, height: usize) -> Self {
+        Self {
+            width,
+            height,
+            pixel_sum: vec![Rgb::BLACK; width * height],
+            pixel_count: vec![0.0; width * height],
+            splat_sum: vec![Rgb::BLACK; width * height],
+            splat_scale: 0.0,
+            discarded: 0,
+        }
+    }
+
+    /// The pixel containing raster position `r`.
+    pub fn pixel_of(&self, r: [f64; 2]) -> Option<usize> {
+        let (x, y) = (r[0].floor(), r[1].floor());
+        (x >= 0.0 && y >= 0.0 && (x as usize) < self.width && (y as usize) < self.height).then(|| y as usize * self.width + x as usize)
+    }
+
+    /// Add one camera-sample estimate to pixel `index`.
+    #[inline]
+    pub fn add_sample(&mut self, index: usize, v: Rgb) {
+        self.pixel_count[index] += 1.0;
+        if v.is_finite() {
+            self.pixel_sum[index] += v;
+        } else {
+            self.discarded += 1;
+        }
+    }
+
+    /// Splat a value at raster position `r`.
+    #[inline]
+    pub fn add_splat(&mut self, r: [f64; 2], v: Rgb) {
+        if !v.is_finite() {
+            self.discarded += 1;
+            return;
+        }
+        if let Some(i) = self.pixel_of(r) {
+            self.splat_sum[i] += v;
+        }
+    }
+
+    /// Add another film's accumulation (same size). Merging in a fixed order keeps results
+    /// independent of the thread count.
+    pub fn merge(&mut self, o: &Film) {
+        for i in 0..self.pixel_sum.len() {
+            self.pixel_sum[i] += o.pixel_sum[i];
+            self.pixel_count[i] += o.pixel_count[i];
+            self.splat_sum[i] += o.splat_sum[i];
+        }
+        self.splat_scale += o.splat_scale;
+        self.discarded += o.discarded;
+    }
+
+    /// The current estimate of every pixel, row-major, top row first.
+    pub fn image(&self) -> Vec<Rgb> {
+        (0..self.pixel_sum.len())
+            .map(|i| {
+                let mut v = if self.pixel_count[i] > 0.0 { self.pixel_sum[i] / self.pixel_count[i] } else { Rgb::BLACK };
+                if self.splat_scale > 0.0 {
+                    v += self.splat_sum[i] / self.splat_scale;
+                }
+                v
+            })
+            .collect()
+    }
+
+    /// Camera samples accumulated over the whole film.
+    pub fn camera_samples(&self) -> f64 {
+        self.pixel_count.iter().sum()
+    }
+}
+
+/// A finished image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+    /// Pixels, row-major, top row first.
+    pub pixels: Vec<Rgb>,
+}
+
+impl Image {
+    /// The film's current estimate.
+    pub fn from_film(film: &Film) -> Self {
+        Self { width: film.width, height: film.height, pixels: film.image() }
+    }
+
+    /// Average of all pixels.
+    pub fn mean(&self) -> Rgb {
+        let n = self.pixels.len().max(1) as f64;
+        self.pixels.iter().fold(Rgb::BLACK, |a, &p| a + p) / n
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn non_finite_values_are_counted_not_accumulated() {
+        let mut f = Film::new(2, 2);
+        f.add_sample(0, Rgb::new(1.0, f64::NAN, 0.0));
+        f.add_sample(0, Rgb::splat(2.0));
+        f.add_splat([1.5, 0.5], Rgb::splat(f64::INFINITY));
+        f.add_splat([1.5, 0.5], Rgb::splat(4.0));
+        f.splat_scale = 2.0;
+        let img = f.image();
+        assert_eq!(img[0], Rgb::splat(1.0)); // (0 + 2) / 2 samples
+        assert_eq!(img[1], Rgb::splat(2.0));
+        assert_eq!(f.discarded, 2);
+        assert!(img.iter().all(|p| p.is_finite()));
+    }
+
+    #[test]
+    fn merge_adds_everything() {
+        let mut a = Film::new(1, 1);
+        let mut b = Film::new(1, 1);
+        a.add_sample(0, Rgb::splat(1.0));
+        b.add_sample(0, Rgb::splat(3.0));
+        a.merge(&b);
+        assert_eq!(a.image()[0], Rgb::splat(2.0));
+    }
+}

@@ -1,0 +1,131 @@
+//! Path tracing with next-event estimation, combining BSDF and light sampling of emitters by MIS
+//! (Veach & Guibas 1995), with optional Russian roulette. Written independently of the
+//! bidirectional path machinery so the two check each other.
+
+use super::{Estimator, Splat};
+use crate::bsdf::TransportMode;
+use crate::geometry::{Ray, offset_origin};
+use crate::light::LightKind;
+use crate::path::MisHeuristic;
+use crate::sampler::{CAMERA_BLOCK, CAMERA_STREAM, IndependentStream, SampleStream, TECHNIQUE_STREAM, VERTEX_BLOCK};
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+
+/// Path tracing settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathTracer {
+    /// Maximum number of edges of a path (pbrt's `maxdepth + 1`).
+    pub max_edges: usize,
+    /// MIS heuristic for emitters.
+    pub heuristic: MisHeuristic,
+    /// Start Russian roulette after this many bounces (`None`: never).
+    pub roulette_after: Option<usize>,
+}
+
+fn mis(a: f64, b: f64, h: MisHeuristic) -> f64 {
+    match h {
+        MisHeuristic::Balance => a / (a + b),
+        MisHeuristic::Power => a * a / (a * a + b * b),
+    }
+}
+
+impl Estimator for PathTracer {
+    fn sample(&self, scene: &Scene, pixel: usize, stream: &mut IndependentStream, _splats: &mut Vec<Splat>) -> Rgb {
+        stream.start_stream(CAMERA_STREAM);
+        let film = super::film_position(scene, pixel, stream.next_2d());
+        let lens = stream.next_2d();
+        let cs = scene.camera.sample_ray(film, lens);
+        if cs.we == 0.0 {
+            return Rgb::BLACK;
+        }
+        let mut ray = cs.ray;
+        let mut beta = Rgb::WHITE;
+        let mut l = Rgb::BLACK;
+        let mut last_pdf = 0.0;
+        let mut specular = true;
+        let prims = &scene.bvh.primitives;
+        for bounces in 0..self.max_edges {
+            let Some(hit) = scene.intersect(&ray) else { break };
+            let p = hit.point;
+            let wo = -ray.d;
+            // Emission reached by the path: `bounces + 1` edges.
+            if let Some((li, light)) = scene.light_at(p.primitive) {
+                let le = light.radiance(p.n, wo);
+                if !le.is_black() {
+                    let w = if specular {
+                        1.0
+                    } else {
+                        let pdf_light = scene.light_distribution.pdf(li) * light.pdf_position() * hit.t * hit.t / p.n.dot(wo).abs();
+                        mis(last_pdf, pdf_light, self.heuristic)
+                    };
+                    l += beta * le * w;
+                }
+            }
+            if bounces + 2 > self.max_edges {
+                break;
+            }
+            let Ok(bsdf) = scene.bsdf(&p) else { break };
+            // Next-event estimation: a path of `bounces + 2` edges.
+            stream.start_stream(TECHNIQUE_STREAM);
+            let choice = stream.next_1d();
+            let u_light = stream.next_2d();
+            if !bsdf.is_delta_only()
+                && let Some((li, p_choice)) = scene.light_distribution.sample(choice)
+            {
+                let light = &scene.lights[li];
+                if let Some((lp, pdf_area)) = light.sample_point(prims, u_light) {
+                    let d = lp.p - p.p;
+                    let dist2 = d.length_squared();
+                    if dist2 > 0.0 {
+                        let wi = d / dist2.sqrt();
+                        let (le, pdf_solid, delta) = match light {
+                            LightKind::Point { intensity, .. } => (*intensity, p_choice * dist2, true),
+                            _ => {
+                                let cos_l = lp.n.dot(-wi).abs();
+                                (light.radiance(lp.n, -wi), p_choice * pdf_area * dist2 / cos_l, false)
+                            }
+                        };
+                        let f = bsdf.eval(wo, wi, TransportMode::Radiance);
+                        if !le.is_black() && !f.is_black() && pdf_solid.is_finite() && pdf_solid > 0.0 {
+                            let light_normal = if delta { None } else { Some(lp.n) };
+                            if scene.visible(p.p, Some(p.n), lp.p, light_normal) {
+                                let w = if delta { 1.0 } else { mis(pdf_solid, bsdf.pdf(wo, wi), self.heuristic) };
+                                l += beta * f * le * (wi.dot(p.n).abs() * w / pdf_solid);
+                            }
+                        }
+                    }
+                }
+            }
+            // Continue by BSDF sampling from this vertex's block.
+            stream.start_stream(CAMERA_STREAM);
+            stream.seek(CAMERA_BLOCK + bounces * VERTEX_BLOCK);
+            let u_lobe = stream.next_1d();
+            let u = stream.next_2d();
+            let rr = stream.next_1d();
+            let Some(bs) = bsdf.sample(wo, u_lobe, u, TransportMode::Radiance) else { break };
+            if bs.pdf == 0.0 || bs.f.is_black() {
+                break;
+            }
+            beta *= bs.f * (bs.wi.dot(p.n).abs() / bs.pdf);
+            specular = bs.delta;
+            last_pdf = bs.pdf;
+            if let Some(after) = self.roulette_after
+                && bounces >= after
+            {
+                let q = (1.0 - beta.max_component()).max(0.05);
+                if rr < q {
+                    break;
+                }
+                beta = beta / (1.0 - q);
+            }
+            if !beta.is_finite() {
+                break;
+            }
+            ray = Ray::new(offset_origin(p.p, p.n, bs.wi), bs.wi);
+        }
+        l
+    }
+    fn splats(&self) -> bool {
+        false
+    }
+}

@@ -1,0 +1,84 @@
+//! The `(s, t)` connection of a light subpath prefix `y_0 … y_{s−1}` and a camera subpath prefix
+//! `z_0 … z_{t−1}` (Veach 1997 §10.2): the unweighted contribution `C*_{s,t}` and, for `t = 1`,
+//! the raster position it lands on. Endpoints are the subpaths' own: `s = 1` connects the light
+//! endpoint `y_0`, `t = 1` the lens point `z_0` (no resampling), so each strategy is a deterministic
+//! function of the two subpaths.
+
+use super::vertex::{Vertex, VertexKind};
+use crate::bsdf::TransportMode;
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+
+/// The contribution of one strategy.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Connection {
+    /// `C*_{s,t}`: path contribution over path density.
+    pub value: Rgb,
+    /// Raster position for `t = 1` (splatted); `None`: the camera sample's own pixel.
+    pub raster: Option<[f64; 2]>,
+}
+
+/// Geometry term between two vertices (cosines only where a vertex lies on a surface, and the lens
+/// cosine for the camera endpoint).
+pub fn geometry(scene: &Scene, a: &Vertex, b: &Vertex) -> f64 {
+    let d = b.p() - a.p();
+    let d2 = d.length_squared();
+    if d2 == 0.0 {
+        return 0.0;
+    }
+    let w = d / d2.sqrt();
+    let cos = |v: &Vertex, w: crate::math::DVec3| -> f64 {
+        match v.kind {
+            VertexKind::Camera => v.n().dot(w).abs(),
+            _ if v.on_surface(scene) => v.n().dot(w).abs(),
+            _ => 1.0,
+        }
+    };
+    cos(a, w) * cos(b, w) / d2
+}
+
+/// Evaluate strategy `(s, t)`; `None` when it contributes nothing (occluded, not connectible,
+/// outside the image).
+pub fn connect(scene: &Scene, light: &[Vertex], camera: &[Vertex], s: usize, t: usize) -> Option<Connection> {
+    if t == 0 || t > camera.len() || s > light.len() {
+        return None;
+    }
+    let pt = &camera[t - 1];
+    if s == 0 {
+        // The camera subpath reached an emitter.
+        if t < 2 {
+            return None;
+        }
+        let le = pt.le(scene, &camera[t - 2]);
+        if le.is_black() {
+            return None;
+        }
+        return Some(Connection { value: le * pt.beta, raster: None });
+    }
+    let qs = &light[s - 1];
+    if !qs.connectible() || !pt.connectible() {
+        return None;
+    }
+    if t == 1 {
+        let w = (qs.p() - pt.p()).normalize_or_zero();
+        let (we, _, raster) = scene.camera.importance(pt.p(), w);
+        let raster = raster?;
+        let fq = if s == 1 { qs.le(scene, pt) } else { qs.f(pt, TransportMode::Importance) };
+        let value = qs.beta * fq * (we * geometry(scene, qs, pt) / pt.pdf_fwd);
+        if value.is_black() || !scene.visible(qs.p(), surface_normal(scene, qs), pt.p(), None) {
+            return None;
+        }
+        return Some(Connection { value, raster: Some(raster) });
+    }
+    let fq = if s == 1 { qs.le(scene, pt) } else { qs.f(pt, TransportMode::Importance) };
+    let fp = pt.f(qs, TransportMode::Radiance);
+    let value = qs.beta * fq * fp * pt.beta * geometry(scene, qs, pt);
+    if value.is_black() || !scene.visible(qs.p(), surface_normal(scene, qs), pt.p(), Some(pt.n())) {
+        return None;
+    }
+    Some(Connection { value, raster: None })
+}
+
+fn surface_normal(scene: &Scene, v: &Vertex) -> Option<crate::math::DVec3> {
+    v.on_surface(scene).then(|| v.n())
+}

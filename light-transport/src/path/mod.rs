@@ -1,0 +1,14 @@
+//! Paths for bidirectional estimators (Veach 1997, ch. 10; the path-space formulation of the
+//! overview paper §2–4): vertices with forward and reverse area-measure densities, camera and light
+//! random walks driven by a sample stream, `(s, t)` connections and their MIS weights. The same
+//! structures serve BDPT, PSSMLT, MMLT and the technique charts of charted MLT.
+
+mod connect;
+mod mis;
+mod vertex;
+mod walk;
+
+pub use connect::{Connection, connect};
+pub use mis::{MisHeuristic, mis_weight};
+pub use vertex::{Vertex, VertexKind};
+pub use walk::{WalkSettings, camera_subpath, light_subpath};

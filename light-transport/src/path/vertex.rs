@@ -1,0 +1,154 @@
+//! Path vertices and the densities between them.
+
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::geometry::SurfacePoint;
+use crate::light::LightKind;
+use crate::math::DVec3;
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+
+/// What a vertex is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VertexKind {
+    /// The lens point of the camera.
+    Camera,
+    /// The first vertex of a light subpath (on light `light`).
+    Light {
+        /// Index of the light.
+        light: u32,
+    },
+    /// A scattering vertex (which may lie on an emitter).
+    Surface,
+}
+
+/// A vertex of a camera or light subpath.
+#[derive(Clone, Debug)]
+pub struct Vertex {
+    /// Kind.
+    pub kind: VertexKind,
+    /// Position, normal, uv, tangent, primitive.
+    pub point: SurfacePoint,
+    /// Unit direction toward the previous vertex of its subpath (zero at endpoints).
+    pub wo: DVec3,
+    /// BSDF (surface vertices).
+    pub bsdf: Option<Bsdf>,
+    /// Throughput of the subpath up to this vertex divided by its density: for a camera vertex 1
+    /// (importance is evaluated when connecting), for a light vertex `1 / (p_choice p_pos)` (emission
+    /// is evaluated when connecting), for surface vertices the usual product of
+    /// `f |cos| / p_σ` factors times the emitted quantity along the subpath.
+    pub beta: Rgb,
+    /// Whether the walk left this vertex through a delta (specular) lobe: no strategy may connect
+    /// here.
+    pub delta: bool,
+    /// Area density of generating this vertex from its predecessor (for endpoints: the density of
+    /// the endpoint itself — lens position, or light choice × position).
+    pub pdf_fwd: f64,
+    /// Area density of generating this vertex from its successor (filled by the walk).
+    pub pdf_rev: f64,
+}
+
+impl Vertex {
+    /// Position.
+    #[inline]
+    pub fn p(&self) -> DVec3 {
+        self.point.p
+    }
+
+    /// Geometric normal (camera: viewing direction; point light: unused).
+    #[inline]
+    pub fn n(&self) -> DVec3 {
+        self.point.n
+    }
+
+    /// Whether this vertex lies on a surface (has a meaningful normal for density conversions).
+    pub fn on_surface(&self, scene: &Scene) -> bool {
+        match self.kind {
+            VertexKind::Surface => true,
+            VertexKind::Light { light } => matches!(scene.lights[light as usize], LightKind::Area { .. }),
+            VertexKind::Camera => false,
+        }
+    }
+
+    /// Whether a connection through this vertex is possible (not a delta-only BSDF).
+    pub fn connectible(&self) -> bool {
+        match self.kind {
+            VertexKind::Surface => self.bsdf.as_ref().is_some_and(|b| !b.is_delta_only()),
+            _ => true,
+        }
+    }
+
+    /// The light this vertex emits from: the light endpoint, or a surface vertex on an area light.
+    pub fn emitter<'a>(&self, scene: &'a Scene) -> Option<(usize, &'a LightKind)> {
+        match self.kind {
+            VertexKind::Light { light } => Some((light as usize, &scene.lights[light as usize])),
+            VertexKind::Surface => scene.light_at(self.point.primitive),
+            VertexKind::Camera => None,
+        }
+    }
+
+    /// Convert a solid-angle density at this vertex toward `next` into an area density at `next`.
+    #[inline]
+    pub fn to_area(&self, pdf_solid_angle: f64, next: &Vertex, scene: &Scene) -> f64 {
+        let d = next.p() - self.p();
+        let d2 = d.length_squared();
+        if d2 == 0.0 {
+            return 0.0;
+        }
+        let mut pdf = pdf_solid_angle / d2;
+        if next.on_surface(scene) {
+            pdf *= next.n().dot(d / d2.sqrt()).abs();
+        }
+        pdf
+    }
+
+    /// BSDF value at this vertex for light arriving from `next` (or the adjoint).
+    pub fn f(&self, next: &Vertex, mode: TransportMode) -> Rgb {
+        let Some(b) = &self.bsdf else { return Rgb::BLACK };
+        let wi = (next.p() - self.p()).normalize_or_zero();
+        b.eval(self.wo, wi, mode)
+    }
+
+    /// Area density at `next` of sampling `next` from this vertex, the walk having arrived from
+    /// `prev` (`None`: this is an endpoint).
+    pub fn pdf(&self, scene: &Scene, prev: Option<&Vertex>, next: &Vertex) -> f64 {
+        let wn = (next.p() - self.p()).normalize_or_zero();
+        let solid = match self.kind {
+            VertexKind::Camera => scene.camera.importance(self.p(), wn).1,
+            VertexKind::Light { light } => scene.lights[light as usize].pdf_direction(self.n(), wn),
+            VertexKind::Surface => {
+                let Some(b) = &self.bsdf else { return 0.0 };
+                let wp = match prev {
+                    Some(p) => (p.p() - self.p()).normalize_or_zero(),
+                    None => self.wo,
+                };
+                b.pdf(wp, wn)
+            }
+        };
+        self.to_area(solid, next, scene)
+    }
+
+    /// For a vertex on an emitter: area density at `next` of a light subpath leaving this point
+    /// toward `next` (the emission direction density).
+    pub fn pdf_light(&self, scene: &Scene, next: &Vertex) -> f64 {
+        let Some((_, light)) = self.emitter(scene) else { return 0.0 };
+        let w = (next.p() - self.p()).normalize_or_zero();
+        self.to_area(light.pdf_direction(self.n(), w), next, scene)
+    }
+
+    /// For a vertex on an emitter: density of a light subpath starting here (light choice × area
+    /// density of the position).
+    pub fn pdf_light_origin(&self, scene: &Scene) -> f64 {
+        let Some((i, light)) = self.emitter(scene) else { return 0.0 };
+        scene.light_distribution.pdf(i) * light.pdf_position()
+    }
+
+    /// Radiance emitted from this vertex toward `toward` (zero if it is not on an emitter).
+    pub fn le(&self, scene: &Scene, toward: &Vertex) -> Rgb {
+        let Some((_, light)) = self.emitter(scene) else { return Rgb::BLACK };
+        let w = (toward.p() - self.p()).normalize_or_zero();
+        match light {
+            LightKind::Point { intensity, .. } => *intensity,
+            _ => light.radiance(self.n(), w),
+        }
+    }
+}

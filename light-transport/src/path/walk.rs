@@ -1,0 +1,161 @@
+//! Camera and light random walks, reading the sample stream in the fixed layout of
+//! [`crate::sampler`]: the camera endpoint from the camera substream's first block, the light
+//! endpoint from the light substream's first block, and the direction leaving the `b`-th vertex of
+//! a subpath from that subpath's `b`-th vertex block. Subpaths are therefore deterministic
+//! functions of the stream, vertex by vertex.
+
+use super::vertex::{Vertex, VertexKind};
+use crate::bsdf::TransportMode;
+use crate::geometry::{Ray, SurfacePoint, offset_origin};
+use crate::sampler::{CAMERA_BLOCK, CAMERA_STREAM, LIGHT_BLOCK, LIGHT_STREAM, SampleStream, VERTEX_BLOCK};
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+
+/// Limits of the walks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WalkSettings {
+    /// Maximum number of edges of a complete path (pbrt's `maxdepth + 1`).
+    pub max_edges: usize,
+}
+
+impl WalkSettings {
+    /// Most vertices a camera subpath needs: `max_edges + 1`.
+    pub fn max_camera_vertices(&self) -> usize {
+        self.max_edges + 1
+    }
+    /// Most vertices a light subpath needs: `max_edges`.
+    pub fn max_light_vertices(&self) -> usize {
+        self.max_edges
+    }
+}
+
+/// Position of the block read when leaving the `b`-th vertex (`b ≥ 1`) of a subpath.
+#[inline]
+pub fn block_start(endpoint_block: usize, b: usize) -> usize {
+    endpoint_block + (b - 1) * VERTEX_BLOCK
+}
+
+/// Trace a camera subpath of at most `max_vertices` vertices into `path` (cleared first). With
+/// `pixel`, the film numbers place the sample inside that pixel; without, over the whole film.
+pub fn camera_subpath<S: SampleStream>(scene: &Scene, stream: &mut S, max_vertices: usize, pixel: Option<usize>, path: &mut Vec<Vertex>) {
+    path.clear();
+    if max_vertices == 0 {
+        return;
+    }
+    stream.start_stream(CAMERA_STREAM);
+    stream.seek(0);
+    let mut film = stream.next_2d();
+    let lens = stream.next_2d();
+    if let Some(p) = pixel {
+        film = crate::integrators::film_position(scene, p, film);
+    }
+    let cs = scene.camera.sample_ray(film, lens);
+    path.push(Vertex {
+        kind: VertexKind::Camera,
+        point: SurfacePoint { p: cs.ray.o, n: scene.camera.forward(), uv: [0.0; 2], dpdu: crate::math::DVec3::X, primitive: u32::MAX },
+        wo: crate::math::DVec3::ZERO,
+        bsdf: None,
+        beta: Rgb::WHITE,
+        delta: false,
+        pdf_fwd: cs.pdf_pos,
+        pdf_rev: 0.0,
+    });
+    if cs.we == 0.0 {
+        return;
+    }
+    // W_e cos θ / (p_pos p_dir) = 1 by the camera's normalisation.
+    random_walk(scene, cs.ray, Rgb::WHITE, cs.pdf_dir, max_vertices, TransportMode::Radiance, stream, CAMERA_BLOCK, path);
+}
+
+/// Trace a light subpath of at most `max_vertices` vertices into `path` (cleared first).
+pub fn light_subpath<S: SampleStream>(scene: &Scene, stream: &mut S, max_vertices: usize, path: &mut Vec<Vertex>) {
+    path.clear();
+    if max_vertices == 0 {
+        return;
+    }
+    stream.start_stream(LIGHT_STREAM);
+    stream.seek(0);
+    let choice = stream.next_1d();
+    let u_pos = stream.next_2d();
+    let u_dir = stream.next_2d();
+    let Some((li, p_choice)) = scene.light_distribution.sample(choice) else { return };
+    let light = &scene.lights[li];
+    let Some(es) = light.sample_emission(&scene.bvh.primitives, u_pos, u_dir) else { return };
+    let pdf_origin = p_choice * es.pdf_pos;
+    path.push(Vertex {
+        kind: VertexKind::Light { light: li as u32 },
+        point: es.point,
+        wo: crate::math::DVec3::ZERO,
+        bsdf: None,
+        beta: Rgb::splat(1.0 / pdf_origin),
+        delta: false,
+        pdf_fwd: pdf_origin,
+        pdf_rev: 0.0,
+    });
+    if es.pdf_dir == 0.0 || es.le.is_black() {
+        return;
+    }
+    let cos = if es.delta_pos { 1.0 } else { es.point.n.dot(es.w).abs() };
+    let beta = es.le * (cos / (pdf_origin * es.pdf_dir));
+    let o = if es.delta_pos { es.point.p } else { offset_origin(es.point.p, es.point.n, es.w) };
+    random_walk(scene, Ray::new(o, es.w), beta, es.pdf_dir, max_vertices, TransportMode::Importance, stream, LIGHT_BLOCK, path);
+}
+
+/// Continue a subpath whose last vertex emitted `ray` with throughput `beta` and solid-angle
+/// density `pdf_dir`, until `max_vertices` vertices or the walk ends.
+#[allow(clippy::too_many_arguments)]
+fn random_walk<S: SampleStream>(
+    scene: &Scene,
+    mut ray: Ray,
+    mut beta: Rgb,
+    mut pdf_dir: f64,
+    max_vertices: usize,
+    mode: TransportMode,
+    stream: &mut S,
+    endpoint_block: usize,
+    path: &mut Vec<Vertex>,
+) {
+    while path.len() < max_vertices {
+        let Some(hit) = scene.intersect(&ray) else { break };
+        let bsdf = scene.bsdf(&hit.point).ok();
+        let mut v = Vertex {
+            kind: VertexKind::Surface,
+            point: hit.point,
+            wo: -ray.d,
+            bsdf,
+            beta,
+            delta: false,
+            pdf_fwd: 0.0,
+            pdf_rev: 0.0,
+        };
+        let prev = path.len() - 1;
+        v.pdf_fwd = path[prev].to_area(pdf_dir, &v, scene);
+        path.push(v);
+        let b = path.len() - 1;
+        if path.len() >= max_vertices {
+            break;
+        }
+        let vert = &path[b];
+        let Some(bsdf) = vert.bsdf.as_ref() else { break };
+        stream.seek(block_start(endpoint_block, b));
+        let u_lobe = stream.next_1d();
+        let u = stream.next_2d();
+        let Some(bs) = bsdf.sample(vert.wo, u_lobe, u, mode) else { break };
+        if bs.pdf == 0.0 || bs.f.is_black() {
+            break;
+        }
+        let n = vert.n();
+        beta *= bs.f * (bs.wi.dot(n).abs() / bs.pdf);
+        if !beta.is_finite() {
+            break;
+        }
+        // Delta directions have no density: both densities are 0 (remapped to 1 in the MIS ratios,
+        // and this vertex is marked so no strategy connects through it).
+        let (pdf_fwd, pdf_rev) = if bs.delta { (0.0, 0.0) } else { (bs.pdf, bsdf.pdf(bs.wi, vert.wo)) };
+        pdf_dir = pdf_fwd;
+        let rev = vert.to_area(pdf_rev, &path[prev], scene);
+        ray = Ray::new(offset_origin(vert.p(), n, bs.wi), bs.wi);
+        path[b].delta = bs.delta;
+        path[prev].pdf_rev = rev;
+    }
+}

@@ -1,0 +1,264 @@
+//! The renderable scene: primitives in a BVH, materials, lights chosen by power, the camera.
+
+use super::description::*;
+use crate::accel::{Bvh, Primitive};
+use crate::bsdf::Bsdf;
+use crate::camera::Camera;
+use crate::geometry::{Hit, Ray, Sphere, SurfacePoint, Triangle, offset_origin};
+use crate::light::{LightDistribution, LightKind};
+use crate::math::{DVec3, Frame};
+use crate::spectrum::Rgb;
+use crate::{Error, Result};
+
+/// Sentinel for "no light" / "no material".
+pub const NONE: u32 = u32::MAX;
+
+/// A scene ready to render.
+pub struct Scene {
+    /// Geometry.
+    pub bvh: Bvh,
+    /// Material of each primitive.
+    pub primitive_material: Vec<u32>,
+    /// Light of each primitive ([`NONE`] if not emissive).
+    pub primitive_light: Vec<u32>,
+    /// Materials.
+    pub materials: Vec<MaterialDesc>,
+    /// Textures.
+    pub textures: Vec<TextureDesc>,
+    /// Lights.
+    pub lights: Vec<LightKind>,
+    /// Light choice by power.
+    pub light_distribution: LightDistribution,
+    /// The camera.
+    pub camera: Camera,
+    /// Bounding box of the geometry.
+    pub bounds: (DVec3, DVec3),
+    /// Warnings and ignored directives from loading, for the user.
+    pub notes: Vec<String>,
+}
+
+impl Scene {
+    /// Build from a description; the image size is the description's unless overridden.
+    pub fn new(desc: &SceneDescription, resolution: Option<(usize, usize)>) -> Result<Self> {
+        let cam = desc.camera.as_ref().ok_or_else(|| Error::InvalidScene("no camera".into()))?;
+        let (w, h) = resolution.unwrap_or((desc.film.width, desc.film.height));
+        validate_resolution(w, h)?;
+        let camera = Camera::new(cam, w, h)?;
+        let mut prims = Vec::new();
+        let mut prim_mat = Vec::new();
+        let mut emissive: Vec<(u32, AreaLightDesc)> = Vec::new();
+        let material_index = |m: usize, what: &str| -> Result<u32> {
+            let n = desc.materials.len() + 1;
+            if m < n {
+                Ok(m as u32)
+            } else {
+                Err(Error::InvalidScene(format!("{what} refers to material {m}, but only {n} exist")))
+            }
+        };
+        for mesh in &desc.meshes {
+            let m = material_index(mesh.material, "a mesh")?;
+            let mut area = 0.0;
+            let first = prims.len();
+            for tri in &mesh.indices {
+                let get = |i: u32| mesh.positions.get(i as usize).copied().ok_or_else(|| Error::InvalidScene(format!("triangle index {i} out of range ({} vertices)", mesh.positions.len())));
+                let p = [get(tri[0])?, get(tri[1])?, get(tri[2])?];
+                let uv = match &mesh.uvs {
+                    Some(uvs) => [tri[0], tri[1], tri[2]].map(|i| uvs.get(i as usize).copied().unwrap_or([0.0, 0.0])),
+                    None => [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
+                };
+                let t = Triangle { p, uv, flip: mesh.flip_normals };
+                let a = t.area();
+                if !(a > 0.0 && a.is_finite()) {
+                    continue; // loaders drop and report degenerate triangles; never trace them
+                }
+                area += a;
+                prims.push(Primitive::Triangle(t));
+                prim_mat.push(m);
+            }
+            if let Some(al) = mesh.area_light {
+                if !(area > 0.0) {
+                    return Err(Error::InvalidScene(format!("an area light mesh{} has zero area", at(&mesh.location))));
+                }
+                for i in first..prims.len() {
+                    emissive.push((i as u32, al));
+                }
+            }
+        }
+        // A uniform infinite light is represented exactly by an enclosing sphere that emits the same
+        // radiance inward (radiance is constant along rays, so every ray leaving the scene sees L
+        // whichever point of the sphere it reaches); the sphere absorbs.
+        let mut spheres = desc.spheres.clone();
+        let mut materials = desc.materials.clone();
+        let infinite: Vec<Rgb> = desc.lights.iter().filter_map(|l| if let LightDesc::Infinite { radiance } = l { Some(*radiance) } else { None }).collect();
+        if infinite.len() > 1 {
+            return Err(Error::InvalidScene("more than one infinite light".into()));
+        }
+        if let Some(&radiance) = infinite.first() {
+            let (lo, hi) = scene_extent(desc, camera.position());
+            let center = (lo + hi) / 2.0;
+            let radius = ((hi - lo).length() / 2.0).max(1e-3) * 2.0;
+            materials.push(MaterialDesc::Matte { kd: RgbTexture::Constant(Rgb::BLACK) });
+            spheres.push(SphereDesc {
+                center,
+                radius,
+                material: materials.len() - 1,
+                area_light: Some(AreaLightDesc { radiance, two_sided: false }),
+                flip_normals: true,
+                location: None,
+            });
+        }
+        let _ = nmat_check(&materials)?;
+        for s in &spheres {
+            if !(s.radius > 0.0 && s.radius.is_finite() && s.center.is_finite()) {
+                return Err(Error::InvalidScene(format!("sphere{} has radius {} at {}", at(&s.location), s.radius, s.center)));
+            }
+            let m = material_index(s.material, "a sphere")?;
+            let i = prims.len() as u32;
+            prims.push(Primitive::Sphere(Sphere { center: s.center, radius: s.radius, flip: s.flip_normals }));
+            prim_mat.push(m);
+            if let Some(al) = s.area_light {
+                emissive.push((i, al));
+            }
+        }
+        let bvh = Bvh::new(prims);
+        let bounds = if bvh.primitives.is_empty() { (DVec3::ZERO, DVec3::ZERO) } else { bvh.bounds() };
+        let mut lights = Vec::new();
+        let mut prim_light = vec![NONE; bvh.primitives.len()];
+        for (i, al) in emissive {
+            if !al.radiance.is_finite() || al.radiance.0.iter().any(|&v| v < 0.0) {
+                return Err(Error::InvalidScene(format!("area light radiance {:?} is negative or not finite", al.radiance.0)));
+            }
+            if al.radiance.is_black() {
+                continue;
+            }
+            let area = match bvh.primitives[i as usize] {
+                Primitive::Triangle(t) => t.area(),
+                Primitive::Sphere(s) => s.area(),
+            };
+            prim_light[i as usize] = lights.len() as u32;
+            lights.push(LightKind::Area { primitive: i, radiance: al.radiance, two_sided: al.two_sided, area });
+        }
+        for l in &desc.lights {
+            if let LightDesc::Point { position, intensity } = *l {
+                if !position.is_finite() || !intensity.is_finite() || intensity.0.iter().any(|&v| v < 0.0) {
+                    return Err(Error::InvalidScene("a point light has a non-finite position or a negative or non-finite intensity".into()));
+                }
+                lights.push(LightKind::Point { position, intensity });
+            }
+        }
+        let powers: Vec<f64> = lights.iter().map(|l| l.power()).collect();
+        if !(powers.iter().sum::<f64>() > 0.0) {
+            return Err(Error::InvalidScene("the scene has no light with positive power: the image would be black".into()));
+        }
+        let mut notes: Vec<String> = desc.ignored.iter().map(|(d, l)| format!("{l}: ignored {d}")).collect();
+        notes.extend(desc.warnings.iter().map(|(w, l)| format!("{l}: {w}")));
+        Ok(Self {
+            bvh,
+            primitive_material: prim_mat,
+            primitive_light: prim_light,
+            materials,
+            textures: desc.textures.clone(),
+            light_distribution: LightDistribution::new(&powers),
+            lights,
+            camera,
+            bounds,
+            notes,
+        })
+    }
+
+    /// The closest surface along a ray.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.bvh.closest_hit(ray.o, ray.d, ray.t_max)
+    }
+
+    /// Whether two points see each other (each offset from its surface toward the other).
+    pub fn visible(&self, a: DVec3, na: Option<DVec3>, b: DVec3, nb: Option<DVec3>) -> bool {
+        let d = b - a;
+        let o = match na {
+            Some(n) => offset_origin(a, n, d),
+            None => a,
+        };
+        let e = match nb {
+            Some(n) => offset_origin(b, n, -d),
+            None => b,
+        };
+        let v = e - o;
+        let dist = v.length();
+        if !(dist > 0.0) {
+            return true;
+        }
+        !self.bvh.occluded(o, v / dist, dist)
+    }
+
+    /// The BSDF at a surface point.
+    pub fn bsdf(&self, point: &SurfacePoint) -> Result<Bsdf> {
+        let m = self.primitive_material[point.primitive as usize] as usize;
+        let frame = Frame::from_normal_tangent(point.n, point.dpdu);
+        Bsdf::from_material(&self.materials, &self.textures, m, point.uv, frame)
+    }
+
+    /// The light at a primitive, if it is emissive.
+    pub fn light_at(&self, primitive: u32) -> Option<(usize, &LightKind)> {
+        let l = *self.primitive_light.get(primitive as usize)?;
+        (l != NONE).then(|| (l as usize, &self.lights[l as usize]))
+    }
+
+    /// Number of triangles and spheres.
+    pub fn primitive_counts(&self) -> (usize, usize) {
+        let t = self.bvh.primitives.iter().filter(|p| matches!(p, Primitive::Triangle(_))).count();
+        (t, self.bvh.primitives.len() - t)
+    }
+}
+
+fn nmat_check(materials: &[MaterialDesc]) -> Result<usize> {
+    for (i, m) in materials.iter().enumerate() {
+        if let MaterialDesc::Mix { a, b, .. } = m
+            && (*a >= materials.len() || *b >= materials.len())
+        {
+            return Err(Error::InvalidScene(format!("mix material {i} refers to a missing material")));
+        }
+    }
+    Ok(materials.len())
+}
+
+/// Bounding box of the geometry and the camera position.
+fn scene_extent(desc: &SceneDescription, camera: DVec3) -> (DVec3, DVec3) {
+    let mut lo = camera;
+    let mut hi = camera;
+    for m in &desc.meshes {
+        for p in &m.positions {
+            if p.is_finite() {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
+        }
+    }
+    for s in &desc.spheres {
+        lo = lo.min(s.center - DVec3::splat(s.radius));
+        hi = hi.max(s.center + DVec3::splat(s.radius));
+    }
+    for l in &desc.lights {
+        if let LightDesc::Point { position, .. } = l {
+            lo = lo.min(*position);
+            hi = hi.max(*position);
+        }
+    }
+    (lo, hi)
+}
+
+fn at(loc: &Option<crate::error::Location>) -> String {
+    loc.as_ref().map(|l| format!(" ({l})")).unwrap_or_default()
+}
+
+/// Refuse absurd image sizes.
+pub fn validate_resolution(w: usize, h: usize) -> Result<()> {
+    const MAX: usize = 16_384;
+    if w == 0 || h == 0 || w > MAX || h > MAX {
+        return Err(Error::InvalidParameter {
+            name: "resolution".into(),
+            reason: format!("{w}×{h} is outside 1×1 … {MAX}×{MAX}"),
+        });
+    }
+    Ok(())
+}

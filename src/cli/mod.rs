@@ -1,0 +1,55 @@
+//! Command-line interface.
+
+mod algo;
+mod duration;
+mod info;
+mod render;
+mod scene_arg;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+
+/// Errors of the command line.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    /// From the renderer.
+    #[error(transparent)]
+    Render(#[from] light_transport::Error),
+    /// Bad arguments.
+    #[error("{0}")]
+    Usage(String),
+    /// File system.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+}
+
+/// Charted Metropolis light transport: a research renderer.
+#[derive(Parser, Debug)]
+#[command(name = "charted", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Render a scene (a pbrt-v3 file or a built-in scene: cornell, caustic, door).
+    Render(render::RenderArgs),
+    /// Describe a scene: geometry, lights, materials, camera, what was ignored.
+    Info(info::InfoArgs),
+}
+
+/// Run the command line.
+pub fn run(cli: Cli) -> Result<(), CliError> {
+    match cli.command {
+        None => run(Cli::parse_from(["charted", "render"])),
+        Some(Command::Render(a)) => render::run(a),
+        Some(Command::Info(a)) => info::run(a),
+    }
+}
