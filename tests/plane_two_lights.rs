@@ -48,7 +48,12 @@ fn blocks(img: &Image) -> Vec<f64> {
 }
 
 /// The smallest Holm-adjusted p-value over blocks for `alg`.
-fn verdict(alg: Algorithm, reference: &[f64], ref_se: &[f64], norm: &algorithms::Normalisation) -> f64 {
+fn verdict(
+    alg: Algorithm,
+    reference: &[f64],
+    ref_se: &[f64],
+    norm: &algorithms::Normalisation,
+) -> f64 {
     let runs: Vec<Vec<f64>> = (0..RUNS)
         .into_par_iter()
         .map(|r| blocks(&run(alg, N, norm, &mut substream(77, alg as u64, r as u64)).image))
@@ -74,16 +79,24 @@ fn every_algorithm_converges_to_the_reference_and_a_broken_ipsm_does_not() {
     let nb = SIZE / BLOCK;
     let mut block_var = vec![0.0; nb * nb];
     for (k, v) in var.iter().enumerate() {
-        block_var[(k / SIZE / BLOCK) * nb + k % SIZE / BLOCK] += v / ((BLOCK * BLOCK) as f64).powi(2);
+        block_var[(k / SIZE / BLOCK) * nb + k % SIZE / BLOCK] +=
+            v / ((BLOCK * BLOCK) as f64).powi(2);
     }
     let ref_se: Vec<f64> = block_var.iter().map(|v| v.sqrt()).collect();
     let norm = bootstrap(1 << 20, &mut stream(2, 0));
     for alg in Algorithm::WITH_ST {
         let p = verdict(alg, &reference, &ref_se, &norm);
         println!("{:<12} min Holm-adjusted p = {p:.3e}", alg.name());
-        assert!(p > 1e-3, "{} disagrees with the reference (p = {p:.2e})", alg.name());
+        assert!(
+            p > 1e-3,
+            "{} disagrees with the reference (p = {p:.2e})",
+            alg.name()
+        );
     }
     let p = verdict(Algorithm::CmltIpsmBroken, &reference, &ref_se, &norm);
-    println!("{:<12} min Holm-adjusted p = {p:.3e}", "IPSM without p_i ratio");
+    println!(
+        "{:<12} min Holm-adjusted p = {p:.3e}",
+        "IPSM without p_i ratio"
+    );
     assert!(p < 1e-3, "the broken IPSM was not caught (p = {p:.2e})");
 }

@@ -17,7 +17,9 @@ use mcmc_charts::{Atlas, ChartState, ChartedTarget, TargetKind};
 use mcmc_core::population::systematic_resample;
 use mcmc_core::proposals::{CubeWalk, Independence, Mixture, MixtureRule, SmallStep, UniformCube};
 use mcmc_core::rng::uniform;
-use mcmc_core::tempering::{LevelObserver, LevelProposal, ReplicaExchange, SerialTempering, SwapSchedule};
+use mcmc_core::tempering::{
+    LevelObserver, LevelProposal, ReplicaExchange, SerialTempering, SwapSchedule,
+};
 use mcmc_core::{Chain, ChainRng, Family, Kernel, Level, MetropolisHastings, Observer};
 
 pub type State = ChartState<Path>;
@@ -90,7 +92,10 @@ pub fn atlas(identity: bool) -> Atlas<Path> {
 fn pssmlt_kernel() -> Mixture<'static, Vec<f64>> {
     Mixture::new(
         vec![
-            (0.7, Box::new(CubeWalk::new(SmallStep::default()).expect("valid step")) as _),
+            (
+                0.7,
+                Box::new(CubeWalk::new(SmallStep::default()).expect("valid step")) as _,
+            ),
             (0.3, Box::new(Independence::new(UniformCube)) as _),
         ],
         MixtureRule::PerComponent,
@@ -141,7 +146,11 @@ pub fn bootstrap(n: usize, rng: &mut ChainRng) -> Normalisation {
     }
     let nf = n as f64;
     let b = s / nf;
-    Normalisation { b, b_chart: [sa[0] / nf, sa[1] / nf], rel_se: ((s2 / nf - b * b) / nf).sqrt() / b }
+    Normalisation {
+        b,
+        b_chart: [sa[0] / nf, sa[1] / nf],
+        rel_se: ((s2 / nf - b * b) / nf).sqrt() / b,
+    }
 }
 
 /// Records the expected value of every proposal into an image, scaled by `scale` and weighted by
@@ -155,7 +164,12 @@ pub struct Recorder<'a> {
 
 impl<'a> Recorder<'a> {
     fn new(scale: [f64; 2], weight: Option<&'a Atlas<Path>>, chart: usize) -> Self {
-        Self { image: Image::new(), scale, weight, chart }
+        Self {
+            image: Image::new(),
+            scale,
+            weight,
+            chart,
+        }
     }
 
     fn record(&mut self, level: usize, s: &State, a: f64) {
@@ -165,7 +179,10 @@ impl<'a> Recorder<'a> {
         let f = s.x.contribution();
         let mut w = a * self.scale[level] / s.importance;
         if let Some(atlas) = self.weight {
-            let p = [atlas.ln_density(0, &s.x).exp(), atlas.ln_density(1, &s.x).exp()];
+            let p = [
+                atlas.ln_density(0, &s.x).exp(),
+                atlas.ln_density(1, &s.x).exp(),
+            ];
             w *= p[self.chart] / (p[0] + p[1]);
         }
         // Pixel values are averages over the pixel's footprint: divide by its area 1/SIZE².
@@ -225,10 +242,29 @@ pub struct Run {
 }
 
 /// One chain of `steps` perturbations in `level` of `target`, recorded with `scale`.
-fn single_chain(target: &Target, level: usize, steps: usize, recorder: &mut Recorder, rng: &mut ChainRng) -> f64 {
+fn single_chain(
+    target: &Target,
+    level: usize,
+    steps: usize,
+    recorder: &mut Recorder,
+    rng: &mut ChainRng,
+) -> f64 {
     let s = seed_state(target, level, 100_000, rng);
-    let mut chain = Chain::start(&Level { family: target, level }, s).expect("seed has positive density");
-    let mut mh = MetropolisHastings::new(Level { family: target, level }, InChart::new(pssmlt_kernel()));
+    let mut chain = Chain::start(
+        &Level {
+            family: target,
+            level,
+        },
+        s,
+    )
+    .expect("seed has positive density");
+    let mut mh = MetropolisHastings::new(
+        Level {
+            family: target,
+            level,
+        },
+        InChart::new(pssmlt_kernel()),
+    );
     for _ in 0..steps {
         mh.step(&mut chain, rng, recorder);
     }
@@ -238,14 +274,22 @@ fn single_chain(target: &Target, level: usize, steps: usize, recorder: &mut Reco
 pub fn run(alg: Algorithm, n: usize, norm: &Normalisation, rng: &mut ChainRng) -> Run {
     let plain = atlas(false);
     let with_id = atlas(true);
-    let is = ChartedTarget::new(&plain, importance as Importance, TargetKind::ImportanceSampled);
+    let is = ChartedTarget::new(
+        &plain,
+        importance as Importance,
+        TargetKind::ImportanceSampled,
+    );
     let weighted = ChartedTarget::new(&plain, importance as Importance, TargetKind::Weighted);
     match alg {
         Algorithm::Pssmlt1 | Algorithm::Pssmlt2 => {
             let k = (alg == Algorithm::Pssmlt2) as usize;
             let mut r = Recorder::new([norm.b / n as f64; 2], None, k);
             let acc = single_chain(&is, k, n, &mut r, rng);
-            Run { image: r.image, acceptance: acc, swap_acceptance: None }
+            Run {
+                image: r.image,
+                acceptance: acc,
+                swap_acceptance: None,
+            }
         }
         Algorithm::PssmltAvg | Algorithm::PssmltMix => {
             let mut image = Image::new();
@@ -260,51 +304,134 @@ pub fn run(alg: Algorithm, n: usize, norm: &Normalisation, rng: &mut ChainRng) -
                 acc += 0.5 * single_chain(target, k, n / 2, &mut r, rng);
                 image.add_image(&r.image);
             }
-            Run { image, acceptance: acc, swap_acceptance: None }
+            Run {
+                image,
+                acceptance: acc,
+                swap_acceptance: None,
+            }
         }
         Algorithm::CmltIpsm | Algorithm::CmltIpsmBroken => {
-            let target = ChartedTarget::new(&with_id, importance as Importance, TargetKind::ImportanceSampled);
+            let target = ChartedTarget::new(
+                &with_id,
+                importance as Importance,
+                TargetKind::ImportanceSampled,
+            );
             let id = with_id.identity();
             let s = seed_state(&target, id, 100_000, rng);
-            let mut chain = Chain::start(&Level { family: &target, level: id }, s).expect("seed");
+            let mut chain = Chain::start(
+                &Level {
+                    family: &target,
+                    level: id,
+                },
+                s,
+            )
+            .expect("seed");
             let mut through = [0, 1].map(|k| {
                 let mut p = InversePerturbation::new(&target, k, pssmlt_kernel());
                 p.forget_density_ratio = alg == Algorithm::CmltIpsmBroken;
-                MetropolisHastings::new(Level { family: &target, level: id }, p)
+                MetropolisHastings::new(
+                    Level {
+                        family: &target,
+                        level: id,
+                    },
+                    p,
+                )
             });
             let mut r = Recorder::new([norm.b / n as f64; 2], None, 0);
             for i in 0..n {
                 through[i % 2].step(&mut chain, rng, &mut r);
             }
-            Run { image: r.image, acceptance: chain.stats.total().acceptance_rate(), swap_acceptance: None }
+            Run {
+                image: r.image,
+                acceptance: chain.stats.total().acceptance_rate(),
+                swap_acceptance: None,
+            }
         }
         Algorithm::CmltSt => {
             // Start in a chart chosen in proportion to its energy.
             let k = (uniform(rng) * norm.b > norm.b_chart[0]) as usize;
             let init = seed_state(&weighted, k, 100_000, rng);
-            let kernels: Vec<_> = (0..2).map(|k| MetropolisHastings::new(Level { family: &weighted, level: k }, InChart::new(pssmlt_kernel()))).collect();
-            let mut st = SerialTempering::new(&weighted, kernels, init, k, None, LevelProposal::Independent(vec![0.5, 0.5])).expect("two charts");
+            let kernels: Vec<_> = (0..2)
+                .map(|k| {
+                    MetropolisHastings::new(
+                        Level {
+                            family: &weighted,
+                            level: k,
+                        },
+                        InChart::new(pssmlt_kernel()),
+                    )
+                })
+                .collect();
+            let mut st = SerialTempering::new(
+                &weighted,
+                kernels,
+                init,
+                k,
+                None,
+                LevelProposal::Independent(vec![0.5, 0.5]),
+            )
+            .expect("two charts");
             st.local_steps = 4;
             // The joint target Σ_i π̄_i = f: every step records with the full normalisation.
             let mut r = Recorder::new([norm.b / n as f64; 2], None, 0);
             for _ in 0..n / 4 {
                 st.step(rng, &mut r);
             }
-            let moves: (u64, u64) = st.level_moves.iter().fold((0, 0), |a, m| (a.0 + m.attempted, a.1 + m.accepted));
-            Run { image: r.image, acceptance: st.chain.stats.total().acceptance_rate(), swap_acceptance: Some(moves.1 as f64 / moves.0 as f64) }
+            let moves: (u64, u64) = st
+                .level_moves
+                .iter()
+                .fold((0, 0), |a, m| (a.0 + m.attempted, a.1 + m.accepted));
+            Run {
+                image: r.image,
+                acceptance: st.chain.stats.total().acceptance_rate(),
+                swap_acceptance: Some(moves.1 as f64 / moves.0 as f64),
+            }
         }
         Algorithm::Cmlt | Algorithm::CmltBrokenSwap => {
-            let init = vec![seed_state(&weighted, 0, 100_000, rng), seed_state(&weighted, 1, 100_000, rng)];
-            let kernels: Vec<_> = (0..2).map(|k| MetropolisHastings::new(Level { family: &weighted, level: k }, InChart::new(pssmlt_kernel()))).collect();
-            let family = SwapFamily { target: &weighted, forget_densities: alg == Algorithm::CmltBrokenSwap };
-            let mut re = ReplicaExchange::new(&family, kernels, init, SwapSchedule::StochasticEvenOdd).expect("two chains");
+            let init = vec![
+                seed_state(&weighted, 0, 100_000, rng),
+                seed_state(&weighted, 1, 100_000, rng),
+            ];
+            let kernels: Vec<_> = (0..2)
+                .map(|k| {
+                    MetropolisHastings::new(
+                        Level {
+                            family: &weighted,
+                            level: k,
+                        },
+                        InChart::new(pssmlt_kernel()),
+                    )
+                })
+                .collect();
+            let family = SwapFamily {
+                target: &weighted,
+                forget_densities: alg == Algorithm::CmltBrokenSwap,
+            };
+            let mut re =
+                ReplicaExchange::new(&family, kernels, init, SwapSchedule::StochasticEvenOdd)
+                    .expect("two chains");
             re.local_steps = 4;
-            let mut r = Recorder::new([norm.b_chart[0] / (n / 2) as f64, norm.b_chart[1] / (n / 2) as f64], None, 0);
+            let mut r = Recorder::new(
+                [
+                    norm.b_chart[0] / (n / 2) as f64,
+                    norm.b_chart[1] / (n / 2) as f64,
+                ],
+                None,
+                0,
+            );
             for _ in 0..n / 8 {
                 re.sweep(rng, &mut r);
             }
-            let acc = 0.5 * re.chains.iter().map(|c| c.stats.total().acceptance_rate()).sum::<f64>();
-            Run { image: r.image, acceptance: acc, swap_acceptance: Some(re.swaps[0].rate()) }
+            let acc = 0.5
+                * re.chains
+                    .iter()
+                    .map(|c| c.stats.total().acceptance_rate())
+                    .sum::<f64>();
+            Run {
+                image: r.image,
+                acceptance: acc,
+                swap_acceptance: Some(re.swaps[0].rate()),
+            }
         }
     }
 }
@@ -322,9 +449,20 @@ impl Family<State> for SwapFamily<'_> {
     fn ln_density(&self, level: usize, x: &mut State) -> f64 {
         self.target.ln_density(level, x)
     }
-    fn transfer(&self, from: usize, to: usize, x: &State, y: &mut State, rng: &mut ChainRng) -> f64 {
+    fn transfer(
+        &self,
+        from: usize,
+        to: usize,
+        x: &State,
+        y: &mut State,
+        rng: &mut ChainRng,
+    ) -> f64 {
         let g = self.target.transfer(from, to, x, y, rng);
-        if self.forget_densities && g.is_finite() { 0.0 } else { g }
+        if self.forget_densities && g.is_finite() {
+            0.0
+        } else {
+            g
+        }
     }
 }
 
@@ -340,7 +478,11 @@ pub fn reference(spp: usize, seed: u64) -> (Image, f64, Vec<f64>) {
     let pdf_emission = |x: f64| RATE * (RATE * x).exp() / (RATE.exp() - 1.0);
     let pdf_cosine = |p: &Path| {
         let (r2, cg, cl) = p.geometry();
-        if cg <= 0.0 || cl <= 0.0 { 0.0 } else { cg / PI * cl / r2 }
+        if cg <= 0.0 || cl <= 0.0 {
+            0.0
+        } else {
+            cg / PI * cl / r2
+        }
     };
     let rows: Vec<(Vec<[f64; 3]>, f64, Vec<f64>)> = (0..SIZE)
         .into_par_iter()
@@ -352,7 +494,10 @@ pub fn reference(spp: usize, seed: u64) -> (Image, f64, Vec<f64>) {
             for col in 0..SIZE {
                 let (mut s, mut s2, mut t2) = ([0.0; 3], [0.0; 3], 0.0);
                 for _ in 0..spp {
-                    let g = [(col as f64 + uniform(&mut rng)) / SIZE as f64, ((SIZE - 1 - row) as f64 + uniform(&mut rng)) / SIZE as f64];
+                    let g = [
+                        (col as f64 + uniform(&mut rng)) / SIZE as f64,
+                        ((SIZE - 1 - row) as f64 + uniform(&mut rng)) / SIZE as f64,
+                    ];
                     let mut est = [0.0; 3];
                     let mut add = |f: [f64; 3], w: f64| {
                         for c in 0..3 {
@@ -361,22 +506,47 @@ pub fn reference(spp: usize, seed: u64) -> (Image, f64, Vec<f64>) {
                     };
                     // Light 1 by emission sampling.
                     let v = uniform(&mut rng);
-                    let x1 = Path { g, light: 1, l: [(1.0 + v * (RATE.exp() - 1.0)).ln() / RATE, uniform(&mut rng)] };
+                    let x1 = Path {
+                        g,
+                        light: 1,
+                        l: [
+                            (1.0 + v * (RATE.exp() - 1.0)).ln() / RATE,
+                            uniform(&mut rng),
+                        ],
+                    };
                     let pe = pdf_emission(x1.l[0]);
                     add(x1.contribution(), 1.0 / (pe + pdf_cosine(&x1)));
                     // Light 1 by cosine sampling (hits of light 2 are left to the next strategy).
                     let (phi, u) = (2.0 * PI * uniform(&mut rng), uniform(&mut rng));
-                    let d = [(1.0 - u).sqrt() * phi.cos(), (1.0 - u).sqrt() * phi.sin(), u.sqrt()];
+                    let d = [
+                        (1.0 - u).sqrt() * phi.cos(),
+                        (1.0 - u).sqrt() * phi.sin(),
+                        u.sqrt(),
+                    ];
                     if d[1] < 0.0 {
                         let t = -g[1] / d[1];
-                        let x2 = Path { g, light: 1, l: [g[0] + t * d[0], t * d[2]] };
+                        let x2 = Path {
+                            g,
+                            light: 1,
+                            l: [g[0] + t * d[0], t * d[2]],
+                        };
                         if (0.0..1.0).contains(&x2.l[0]) && (0.0..1.0).contains(&x2.l[1]) {
-                            add(x2.contribution(), 1.0 / (pdf_emission(x2.l[0]) + pdf_cosine(&x2)));
+                            add(
+                                x2.contribution(),
+                                1.0 / (pdf_emission(x2.l[0]) + pdf_cosine(&x2)),
+                            );
                         }
                     }
                     // Light 2 through the hole.
                     let (c, h) = visible_square(&g);
-                    let x3 = Path { g, light: 2, l: [c[0] + h * (2.0 * uniform(&mut rng) - 1.0), c[1] + h * (2.0 * uniform(&mut rng) - 1.0)] };
+                    let x3 = Path {
+                        g,
+                        light: 2,
+                        l: [
+                            c[0] + h * (2.0 * uniform(&mut rng) - 1.0),
+                            c[1] + h * (2.0 * uniform(&mut rng) - 1.0),
+                        ],
+                    };
                     add(x3.contribution(), 4.0 * h * h);
                     for c in 0..3 {
                         s[c] += est[c];

@@ -29,7 +29,9 @@ pub struct NextEvent {
 
 impl NextEvent {
     pub fn new() -> Self {
-        Self { p1: power1() / (power1() + power2()) }
+        Self {
+            p1: power1() / (power1() + power2()),
+        }
     }
     fn cdf1(x: f64) -> f64 {
         ((RATE * x).exp() - 1.0) / (RATE.exp() - 1.0)

@@ -13,7 +13,9 @@ pub struct Image {
 
 impl Image {
     pub fn new() -> Self {
-        Self { data: vec![[0.0; 3]; SIZE * SIZE] }
+        Self {
+            data: vec![[0.0; 3]; SIZE * SIZE],
+        }
     }
 
     /// The pixel of a ground point (row 0 at the top, `y` up).
@@ -42,12 +44,26 @@ impl Image {
     /// Root mean square error over pixels and channels.
     pub fn rmse(&self, reference: &Image) -> f64 {
         let n = (self.data.len() * 3) as f64;
-        (self.data.iter().zip(&reference.data).map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>()).sum::<f64>() / n).sqrt()
+        (self
+            .data
+            .iter()
+            .zip(&reference.data)
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>())
+            .sum::<f64>()
+            / n)
+            .sqrt()
     }
 
     /// RMSE of one channel.
     pub fn rmse_channel(&self, reference: &Image, c: usize) -> f64 {
-        (self.data.iter().zip(&reference.data).map(|(a, b)| (a[c] - b[c]).powi(2)).sum::<f64>() / self.data.len() as f64).sqrt()
+        (self
+            .data
+            .iter()
+            .zip(&reference.data)
+            .map(|(a, b)| (a[c] - b[c]).powi(2))
+            .sum::<f64>()
+            / self.data.len() as f64)
+            .sqrt()
     }
 
     /// sRGB PNG with the given exposure and a Reinhard curve `v / (1 + v)`.
@@ -55,7 +71,11 @@ impl Image {
         let srgb = |v: f64| {
             let v = v * exposure;
             let v = (v / (1.0 + v)).clamp(0.0, 1.0);
-            let s = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+            let s = if v <= 0.003_130_8 {
+                12.92 * v
+            } else {
+                1.055 * v.powf(1.0 / 2.4) - 0.055
+            };
             (s * 255.0).round() as u8
         };
         RgbImage::from_fn(SIZE as u32, SIZE as u32, |x, y| {
@@ -69,7 +89,11 @@ impl Image {
     pub fn error_png(&self, reference: &Image, scale: f64) -> RgbImage {
         RgbImage::from_fn(SIZE as u32, SIZE as u32, |x, y| {
             let k = y as usize * SIZE + x as usize;
-            let e = ((0..3).map(|c| (self.data[k][c] - reference.data[k][c]).powi(2)).sum::<f64>() / 3.0).sqrt();
+            let e = ((0..3)
+                .map(|c| (self.data[k][c] - reference.data[k][c]).powi(2))
+                .sum::<f64>()
+                / 3.0)
+                .sqrt();
             super::support::colour(e / scale)
         })
     }
@@ -87,7 +111,11 @@ pub fn mosaic(tiles: &[RgbImage], cols: usize) -> RgbImage {
     let gap = 4u32;
     let (w, h) = (SIZE as u32, SIZE as u32);
     let rows = tiles.len().div_ceil(cols) as u32;
-    let mut out = RgbImage::from_pixel(cols as u32 * (w + gap) - gap, rows * (h + gap) - gap, Rgb([255; 3]));
+    let mut out = RgbImage::from_pixel(
+        cols as u32 * (w + gap) - gap,
+        rows * (h + gap) - gap,
+        Rgb([255; 3]),
+    );
     for (i, t) in tiles.iter().enumerate() {
         let (cx, cy) = ((i % cols) as u32 * (w + gap), (i / cols) as u32 * (h + gap));
         image::imageops::overlay(&mut out, t, cx as i64, cy as i64);
@@ -96,5 +124,6 @@ pub fn mosaic(tiles: &[RgbImage], cols: usize) -> RgbImage {
 }
 
 pub fn save(img: &RgbImage, path: &FsPath) -> Result<(), String> {
-    img.save(path).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    img.save(path)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))
 }

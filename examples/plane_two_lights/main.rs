@@ -48,13 +48,20 @@ fn check_charts() -> Result<(), String> {
     let sample = |rng: &mut mcmc_core::ChainRng| {
         let g = [uniform(rng), uniform(rng)];
         if uniform(rng) < 0.5 {
-            return Path { g, light: 1, l: [uniform(rng), uniform(rng)] };
+            return Path {
+                g,
+                light: 1,
+                l: [uniform(rng), uniform(rng)],
+            };
         }
         let l = if uniform(rng) < 0.5 {
             [uniform(rng), uniform(rng)]
         } else {
             let (c, h) = scene::visible_square(&g);
-            [c[0] + h * (2.0 * uniform(rng) - 1.0), c[1] + h * (2.0 * uniform(rng) - 1.0)]
+            [
+                c[0] + h * (2.0 * uniform(rng) - 1.0),
+                c[1] + h * (2.0 * uniform(rng) - 1.0),
+            ]
         };
         Path { g, light: 2, l }
     };
@@ -71,17 +78,34 @@ fn check_charts() -> Result<(), String> {
         let i = ((x.g[0] * 4.0) as usize).min(3) * 4 + ((x.g[1] * 4.0) as usize).min(3);
         Some(i * 2 + (x.light as usize - 1))
     };
-    let reference = DensityReference { sample: &sample, ln_density: &ln_q, cell: &cell, cells: 32 };
+    let reference = DensityReference {
+        sample: &sample,
+        ln_density: &ln_q,
+        cell: &cell,
+        cells: 32,
+    };
     let dist = |a: &Path, b: &Path| {
         if a.light != b.light {
             return f64::INFINITY;
         }
-        (0..2).map(|i| (a.g[i] - b.g[i]).abs().max((a.l[i] - b.l[i]).abs())).fold(0.0, f64::max)
+        (0..2)
+            .map(|i| (a.g[i] - b.g[i]).abs().max((a.l[i] - b.l[i]).abs()))
+            .fold(0.0, f64::max)
     };
     for k in 0..2 {
         let chart = atlas.chart(k).ok_or("missing chart")?;
-        let r = check_chart(chart, &dist, Some(&reference), &CheckerConfig { samples: 100_000, alpha: 1e-4, tolerance: 1e-9 }, &mut stream(99, k as u64))
-            .map_err(|e| e.to_string())?;
+        let r = check_chart(
+            chart,
+            &dist,
+            Some(&reference),
+            &CheckerConfig {
+                samples: 100_000,
+                alpha: 1e-4,
+                tolerance: 1e-9,
+            },
+            &mut stream(99, k as u64),
+        )
+        .map_err(|e| e.to_string())?;
         print!("{r}");
     }
     Ok(())
@@ -90,9 +114,17 @@ fn check_charts() -> Result<(), String> {
 fn try_main() -> Result<(), String> {
     let quick = support::quick_flag()?;
     let plan = if quick {
-        Plan { ns: vec![(1 << 20, 3)], reference_spp: 512, bootstrap: 1 << 20 }
+        Plan {
+            ns: vec![(1 << 20, 3)],
+            reference_spp: 512,
+            bootstrap: 1 << 20,
+        }
     } else {
-        Plan { ns: vec![(16_000_000, 4), (128_000_000, 2)], reference_spp: 65_536, bootstrap: 1 << 26 }
+        Plan {
+            ns: vec![(16_000_000, 4), (128_000_000, 2)],
+            reference_spp: 65_536,
+            bootstrap: 1 << 26,
+        }
     };
     let dir = std::path::Path::new("out/plane_two_lights");
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
@@ -100,17 +132,28 @@ fn try_main() -> Result<(), String> {
 
     let t = Instant::now();
     let (reference, ref_se, _) = reference(plan.reference_spp, 1);
-    println!("\n== reference: plain Monte Carlo (light 1: emission + cosine sampling, balance heuristic; light 2: the square seen through the hole), {} spp: {:.1} s, RMS standard error {:.2e}", plan.reference_spp, t.elapsed().as_secs_f64(), ref_se);
+    println!(
+        "\n== reference: plain Monte Carlo (light 1: emission + cosine sampling, balance heuristic; light 2: the square seen through the hole), {} spp: {:.1} s, RMS standard error {:.2e}",
+        plan.reference_spp,
+        t.elapsed().as_secs_f64(),
+        ref_se
+    );
     let exposure = reference.auto_exposure();
     image::save(&reference.to_png(exposure), &dir.join("reference.png"))?;
 
     let norm = bootstrap(plan.bootstrap, &mut stream(2, 0));
-    println!("normalisation: b = {:.5} (relative standard error {:.1e}), b_(1,1) = {:.5}, b_(0,2) = {:.5}", norm.b, norm.rel_se, norm.b_chart[0], norm.b_chart[1]);
+    println!(
+        "normalisation: b = {:.5} (relative standard error {:.1e}), b_(1,1) = {:.5}, b_(0,2) = {:.5}",
+        norm.b, norm.rel_se, norm.b_chart[0], norm.b_chart[1]
+    );
 
     let mut table: Vec<(Algorithm, usize, Vec<f64>, f64, Option<f64>, f64)> = Vec::new();
     let mut channels: Vec<(Algorithm, usize, [f64; 3])> = Vec::new();
     for &(n, runs) in &plan.ns {
-        let jobs: Vec<(Algorithm, usize)> = Algorithm::WITH_ST.iter().flat_map(|&a| (0..runs).map(move |r| (a, r))).collect();
+        let jobs: Vec<(Algorithm, usize)> = Algorithm::WITH_ST
+            .iter()
+            .flat_map(|&a| (0..runs).map(move |r| (a, r)))
+            .collect();
         let t = Instant::now();
         let results: Vec<(Algorithm, usize, algorithms::Run, f64)> = jobs
             .par_iter()
@@ -121,15 +164,30 @@ fn try_main() -> Result<(), String> {
                 (a, r, out, t.elapsed().as_secs_f64())
             })
             .collect();
-        println!("n = {n}: {} runs in {:.1} s", jobs.len(), t.elapsed().as_secs_f64());
+        println!(
+            "n = {n}: {} runs in {:.1} s",
+            jobs.len(),
+            t.elapsed().as_secs_f64()
+        );
         let mut tiles = vec![reference.to_png(exposure)];
-        let best = results.iter().map(|r| r.2.image.rmse(&reference)).fold(f64::INFINITY, f64::min);
+        let best = results
+            .iter()
+            .map(|r| r.2.image.rmse(&reference))
+            .fold(f64::INFINITY, f64::min);
         let mut errs = vec![reference.error_png(&reference, 1.0)];
         for &a in &Algorithm::WITH_ST {
-            let mine: Vec<&(Algorithm, usize, algorithms::Run, f64)> = results.iter().filter(|r| r.0 == a).collect();
+            let mine: Vec<&(Algorithm, usize, algorithms::Run, f64)> =
+                results.iter().filter(|r| r.0 == a).collect();
             let rmse: Vec<f64> = mine.iter().map(|r| r.2.image.rmse(&reference)).collect();
             let secs = mine.iter().map(|r| r.3).sum::<f64>() / mine.len() as f64;
-            table.push((a, n, rmse, mine[0].2.acceptance, mine[0].2.swap_acceptance, secs));
+            table.push((
+                a,
+                n,
+                rmse,
+                mine[0].2.acceptance,
+                mine[0].2.swap_acceptance,
+                secs,
+            ));
             let mut ch = [0.0; 3];
             for r in &mine {
                 for (c, v) in ch.iter_mut().enumerate() {
@@ -140,15 +198,23 @@ fn try_main() -> Result<(), String> {
             let first = &mine[0].2.image;
             let stem = format!("{}_n{}", a.name().to_lowercase(), n);
             image::save(&first.to_png(exposure), &dir.join(format!("{stem}.png")))?;
-            image::save(&first.error_png(&reference, 5.0 * best), &dir.join(format!("{stem}_error.png")))?;
+            image::save(
+                &first.error_png(&reference, 5.0 * best),
+                &dir.join(format!("{stem}_error.png")),
+            )?;
             tiles.push(first.to_png(exposure));
             errs.push(first.error_png(&reference, 5.0 * best));
         }
         tiles.extend(errs);
-        image::save(&image::mosaic(&tiles, 8), &dir.join(format!("mosaic_n{n}.png")))?;
+        image::save(
+            &image::mosaic(&tiles, 8),
+            &dir.join(format!("mosaic_n{n}.png")),
+        )?;
     }
 
-    println!("\n== Table 1: RMSE against the reference (mean ± sd over independent runs; the reference's own RMS error {ref_se:.1e} is included)");
+    println!(
+        "\n== Table 1: RMSE against the reference (mean ± sd over independent runs; the reference's own RMS error {ref_se:.1e} is included)"
+    );
     print!("{:<12}", "algorithm");
     for &(n, runs) in &plan.ns {
         print!(" {:>26}", format!("n = {:.0e} ({runs} runs)", n as f64));
@@ -156,25 +222,55 @@ fn try_main() -> Result<(), String> {
     println!(" {:>10} {:>10} {:>9}", "accept", "swaps", "s/run");
     let stats = |v: &[f64]| {
         let m = v.iter().sum::<f64>() / v.len() as f64;
-        let sd = if v.len() > 1 { (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt() } else { f64::NAN };
+        let sd = if v.len() > 1 {
+            (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
+        } else {
+            f64::NAN
+        };
         (m, sd)
     };
     for &a in &Algorithm::WITH_ST {
         print!("{:<12}", a.name());
         let mut last = None;
         for &(n, _) in &plan.ns {
-            let row = table.iter().find(|r| r.0 == a && r.1 == n).ok_or("missing row")?;
+            let row = table
+                .iter()
+                .find(|r| r.0 == a && r.1 == n)
+                .ok_or("missing row")?;
             let (m, sd) = stats(&row.2);
             print!(" {:>26}", format!("{m:.3e} ± {sd:.1e}"));
             last = Some(row);
         }
         let row = last.ok_or("no rows")?;
-        println!(" {:>9.1}% {:>10} {:>9.1}", 100.0 * row.3, row.4.map(|s| format!("{:.1}%", 100.0 * s)).unwrap_or_else(|| "—".into()), row.5);
+        println!(
+            " {:>9.1}% {:>10} {:>9.1}",
+            100.0 * row.3,
+            row.4
+                .map(|s| format!("{:.1}%", 100.0 * s))
+                .unwrap_or_else(|| "—".into()),
+            row.5
+        );
     }
     for &(n, _) in &plan.ns {
-        let mean = |a: Algorithm| table.iter().find(|r| r.0 == a && r.1 == n).map(|r| stats(&r.2).0).unwrap_or(f64::NAN);
-        let (cmlt, mix, avg, ipsm) = (mean(Algorithm::Cmlt), mean(Algorithm::PssmltMix), mean(Algorithm::PssmltAvg), mean(Algorithm::CmltIpsm));
-        let best = Algorithm::ALL.iter().map(|&a| (mean(a), a)).fold((f64::INFINITY, Algorithm::Cmlt), |b, x| if x.0 < b.0 { x } else { b });
+        let mean = |a: Algorithm| {
+            table
+                .iter()
+                .find(|r| r.0 == a && r.1 == n)
+                .map(|r| stats(&r.2).0)
+                .unwrap_or(f64::NAN)
+        };
+        let (cmlt, mix, avg, ipsm) = (
+            mean(Algorithm::Cmlt),
+            mean(Algorithm::PssmltMix),
+            mean(Algorithm::PssmltAvg),
+            mean(Algorithm::CmltIpsm),
+        );
+        let best = Algorithm::ALL
+            .iter()
+            .map(|&a| (mean(a), a))
+            .fold((f64::INFINITY, Algorithm::Cmlt), |b, x| {
+                if x.0 < b.0 { x } else { b }
+            });
         println!(
             "n = {n}: best of the paper's six {} | CMLT best: {} | MIX < AVG: {} | IPSM between MIX and AVG: {} | CMLT-ST vs PSSMLT-2: {:.1}%",
             best.1.name(),
@@ -185,11 +281,19 @@ fn try_main() -> Result<(), String> {
         );
         let _ = cmlt;
     }
-    println!("\n== RMSE per channel (mean over runs): green is light 2 seen through the hole; red and blue are mostly light 1");
+    println!(
+        "\n== RMSE per channel (mean over runs): green is light 2 seen through the hole; red and blue are mostly light 1"
+    );
     for &(n, _) in &plan.ns {
         println!("n = {n}");
         for (a, _, ch) in channels.iter().filter(|c| c.1 == n) {
-            println!("  {:<12} R {:.3e}  G {:.3e}  B {:.3e}", a.name(), ch[0], ch[1], ch[2]);
+            println!(
+                "  {:<12} R {:.3e}  G {:.3e}  B {:.3e}",
+                a.name(),
+                ch[0],
+                ch[1],
+                ch[2]
+            );
         }
     }
     println!("\nimages: {}", dir.display());

@@ -55,9 +55,7 @@ impl Path {
         let p = self.light_point();
         let crossing = |plane_y: f64| -> Option<(f64, f64)> {
             let t = (plane_y - self.g[1]) / (p[1] - self.g[1]);
-            (t > 0.0 && t < 1.0).then(|| {
-                (self.g[0] + t * (p[0] - self.g[0]), t * p[2])
-            })
+            (t > 0.0 && t < 1.0).then(|| (self.g[0] + t * (p[0] - self.g[0]), t * p[2]))
         };
         if self.light == 1
             && let Some((x, z)) = crossing(STRIP_Y)
@@ -77,7 +75,11 @@ impl Path {
         if self.light == 1 {
             let x = self.l[0];
             let i = (RATE * x).exp() / ((RATE.exp() - 1.0) / RATE);
-            [i * (1.0 - 0.8 * x), i * (0.25 + 0.5 * x * (1.0 - x)), i * (0.15 + 0.85 * x)]
+            [
+                i * (1.0 - 0.8 * x),
+                i * (0.25 + 0.5 * x * (1.0 - x)),
+                i * (0.15 + 0.85 * x),
+            ]
         } else {
             [0.0, GREEN, 0.0]
         }

@@ -23,16 +23,28 @@ pub enum Primitive {
 impl Primitive {
     fn bounds(&self) -> (DVec3, DVec3) {
         match self {
-            Primitive::Triangle(t) => (t.p[0].min(t.p[1]).min(t.p[2]), t.p[0].max(t.p[1]).max(t.p[2])),
-            Primitive::Sphere(s) => (s.center - DVec3::splat(s.radius), s.center + DVec3::splat(s.radius)),
+            Primitive::Triangle(t) => (
+                t.p[0].min(t.p[1]).min(t.p[2]),
+                t.p[0].max(t.p[1]).max(t.p[2]),
+            ),
+            Primitive::Sphere(s) => (
+                s.center - DVec3::splat(s.radius),
+                s.center + DVec3::splat(s.radius),
+            ),
         }
     }
 
     #[inline]
     fn intersect(&self, o: DVec3, d: DVec3, t_max: f64, index: u32) -> Option<Hit> {
         match self {
-            Primitive::Triangle(t) => t.intersect(o, d, t_max).map(|(th, b1, b2)| Hit { t: th, point: t.point(b1, b2, index) }),
-            Primitive::Sphere(s) => s.intersect(o, d, t_max).map(|th| Hit { t: th, point: s.point(o + d * th, index) }),
+            Primitive::Triangle(t) => t.intersect(o, d, t_max).map(|(th, b1, b2)| Hit {
+                t: th,
+                point: t.point(b1, b2, index),
+            }),
+            Primitive::Sphere(s) => s.intersect(o, d, t_max).map(|th| Hit {
+                t: th,
+                point: s.point(o + d * th, index),
+            }),
         }
     }
 
@@ -77,20 +89,35 @@ impl Bvh {
             .iter()
             .map(|p| {
                 let (lo, hi) = p.bounds();
-                let pad = (hi - lo).max_element().max(lo.abs().max(hi.abs()).max_element()) * 1e-6 + 1e-12;
-                Aabb::new(to_f32(lo - DVec3::splat(pad)), to_f32(hi + DVec3::splat(pad)))
+                let pad = (hi - lo)
+                    .max_element()
+                    .max(lo.abs().max(hi.abs()).max_element())
+                    * 1e-6
+                    + 1e-12;
+                Aabb::new(
+                    to_f32(lo - DVec3::splat(pad)),
+                    to_f32(hi + DVec3::splat(pad)),
+                )
             })
             .collect();
         let bvh = if aabbs.is_empty() {
             CwBvh::default()
         } else {
-            build_cwbvh(&aabbs, BvhBuildParams::medium_build(), &mut Duration::default())
+            build_cwbvh(
+                &aabbs,
+                BvhBuildParams::medium_build(),
+                &mut Duration::default(),
+            )
         };
         Self { bvh, primitives }
     }
 
     fn bvh_ray(o: DVec3, d: DVec3, t_max: f64) -> BvhRay {
-        let tmax = if t_max.is_finite() { (t_max * (1.0 + 1e-6)) as f32 } else { f32::INFINITY };
+        let tmax = if t_max.is_finite() {
+            (t_max * (1.0 + 1e-6)) as f32
+        } else {
+            f32::INFINITY
+        };
         BvhRay::new(to_f32(o), to_f32(d), 0.0, tmax)
     }
 
@@ -103,19 +130,20 @@ impl Bvh {
         let mut best: Option<Hit> = None;
         let mut best_t = t_max;
         let mut rh = RayHit::none();
-        self.bvh.ray_traverse(Self::bvh_ray(o, d, t_max), &mut rh, |_, id| {
-            let index = self.bvh.primitive_indices[id];
-            match self.primitives[index as usize].intersect(o, d, best_t, index) {
-                Some(h) => {
-                    best_t = h.t;
-                    best = Some(h);
-                    // Report a slightly larger f32 distance so traversal never culls a box whose
-                    // f32 entry distance rounds above the f64 hit.
-                    (h.t * (1.0 + 1e-6)) as f32
+        self.bvh
+            .ray_traverse(Self::bvh_ray(o, d, t_max), &mut rh, |_, id| {
+                let index = self.bvh.primitive_indices[id];
+                match self.primitives[index as usize].intersect(o, d, best_t, index) {
+                    Some(h) => {
+                        best_t = h.t;
+                        best = Some(h);
+                        // Report a slightly larger f32 distance so traversal never culls a box whose
+                        // f32 entry distance rounds above the f64 hit.
+                        (h.t * (1.0 + 1e-6)) as f32
+                    }
+                    None => f32::INFINITY,
                 }
-                None => f32::INFINITY,
-            }
-        });
+            });
         best
     }
 
@@ -125,18 +153,27 @@ impl Bvh {
         if self.primitives.is_empty() {
             return false;
         }
-        !self.bvh.ray_traverse_miss(Self::bvh_ray(o, d, t_max), |_, id| {
-            let index = self.bvh.primitive_indices[id];
-            if self.primitives[index as usize].hits(o, d, t_max) { 0.0 } else { f32::INFINITY }
-        })
+        !self
+            .bvh
+            .ray_traverse_miss(Self::bvh_ray(o, d, t_max), |_, id| {
+                let index = self.bvh.primitive_indices[id];
+                if self.primitives[index as usize].hits(o, d, t_max) {
+                    0.0
+                } else {
+                    f32::INFINITY
+                }
+            })
     }
 
     /// Bounds of everything.
     pub fn bounds(&self) -> (DVec3, DVec3) {
-        self.primitives.iter().fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), p| {
-            let (a, b) = p.bounds();
-            (lo.min(a), hi.max(b))
-        })
+        self.primitives.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| {
+                let (a, b) = p.bounds();
+                (lo.min(a), hi.max(b))
+            },
+        )
     }
 }
 
@@ -153,17 +190,33 @@ mod tests {
         let mut prims = Vec::new();
         for _ in 0..300 {
             let c = DVec3::new(r(), r(), r()) * 10.0;
-            let p = [c, c + DVec3::new(r(), r(), r()), c + DVec3::new(r(), r(), r())];
-            prims.push(Primitive::Triangle(Triangle { p, uv: [[0.0; 2]; 3], flip: false }));
+            let p = [
+                c,
+                c + DVec3::new(r(), r(), r()),
+                c + DVec3::new(r(), r(), r()),
+            ];
+            prims.push(Primitive::Triangle(Triangle {
+                p,
+                uv: [[0.0; 2]; 3],
+                flip: false,
+            }));
         }
         for _ in 0..20 {
-            prims.push(Primitive::Sphere(Sphere { center: DVec3::new(r(), r(), r()) * 10.0, radius: 0.3 * r() + 0.01, flip: false }));
+            prims.push(Primitive::Sphere(Sphere {
+                center: DVec3::new(r(), r(), r()) * 10.0,
+                radius: 0.3 * r() + 0.01,
+                flip: false,
+            }));
         }
         let bvh = Bvh::new(prims.clone());
         for _ in 0..2000 {
             let o = DVec3::new(r(), r(), r()) * 12.0 - DVec3::splat(1.0);
             let d = (DVec3::new(r(), r(), r()) - DVec3::splat(0.5)).normalize();
-            let brute = prims.iter().enumerate().filter_map(|(i, p)| p.intersect(o, d, f64::INFINITY, i as u32)).min_by(|a, b| a.t.total_cmp(&b.t));
+            let brute = prims
+                .iter()
+                .enumerate()
+                .filter_map(|(i, p)| p.intersect(o, d, f64::INFINITY, i as u32))
+                .min_by(|a, b| a.t.total_cmp(&b.t));
             let fast = bvh.closest_hit(o, d, f64::INFINITY);
             match (brute, fast) {
                 (None, None) => {}

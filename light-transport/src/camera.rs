@@ -63,29 +63,47 @@ pub struct CameraConnection {
 impl Camera {
     /// A camera from its description and image size.
     pub fn new(desc: &CameraDesc, width: usize, height: usize) -> Result<Self> {
-        let Projection::Perspective { fov, lens_radius, focal_distance } = desc.projection;
+        let Projection::Perspective {
+            fov,
+            lens_radius,
+            focal_distance,
+        } = desc.projection;
         if !(fov > 0.0 && fov < PI) {
             return Err(Error::InvalidParameter {
                 name: "fov".into(),
                 reason: format!("must be in (0°, 180°), got {}°", fov.to_degrees()),
             });
         }
-        if !(lens_radius >= 0.0 && lens_radius.is_finite()) || !(focal_distance > 0.0 && focal_distance.is_finite()) {
+        if !(lens_radius >= 0.0 && lens_radius.is_finite())
+            || !(focal_distance > 0.0 && focal_distance.is_finite())
+        {
             return Err(Error::InvalidParameter {
                 name: "lensradius/focaldistance".into(),
-                reason: format!("need lens radius ≥ 0 and focal distance > 0, got {lens_radius} and {focal_distance}"),
+                reason: format!(
+                    "need lens radius ≥ 0 and focal distance > 0, got {lens_radius} and {focal_distance}"
+                ),
             });
         }
         if width == 0 || height == 0 {
-            return Err(Error::InvalidParameter { name: "resolution".into(), reason: "must be positive".into() });
+            return Err(Error::InvalidParameter {
+                name: "resolution".into(),
+                reason: "must be positive".into(),
+            });
         }
         let det = desc.camera_to_world.determinant();
         if !(det.is_finite() && det.abs() > 1e-12) {
-            return Err(Error::InvalidParameter { name: "camera transform".into(), reason: "is singular".into() });
+            return Err(Error::InvalidParameter {
+                name: "camera transform".into(),
+                reason: "is singular".into(),
+            });
         }
         let t = (fov / 2.0).tan();
         let aspect = width as f64 / height as f64;
-        let half = if aspect >= 1.0 { [t * aspect, t] } else { [t, t / aspect] };
+        let half = if aspect >= 1.0 {
+            [t * aspect, t]
+        } else {
+            [t, t / aspect]
+        };
         Ok(Self {
             to_world: desc.camera_to_world,
             to_camera: desc.camera_to_world.inverse(),
@@ -112,12 +130,20 @@ impl Camera {
     }
 
     fn lens_area(&self) -> f64 {
-        if self.lens_radius > 0.0 { PI * self.lens_radius * self.lens_radius } else { 1.0 }
+        if self.lens_radius > 0.0 {
+            PI * self.lens_radius * self.lens_radius
+        } else {
+            1.0
+        }
     }
 
     /// Sample a ray: `film` in `[0,1)²` over the whole image (x right, y down), `lens` in `[0,1)²`.
     pub fn sample_ray(&self, film: [f64; 2], lens: [f64; 2]) -> CameraSample {
-        let p_img = DVec3::new((2.0 * film[0] - 1.0) * self.half[0], (1.0 - 2.0 * film[1]) * self.half[1], 1.0);
+        let p_img = DVec3::new(
+            (2.0 * film[0] - 1.0) * self.half[0],
+            (1.0 - 2.0 * film[1]) * self.half[1],
+            1.0,
+        );
         let (o_cam, d_cam) = if self.lens_radius > 0.0 {
             let l = concentric_disk(lens).map(|v| v * self.lens_radius);
             let o = DVec3::new(l[0], l[1], 0.0);
@@ -129,7 +155,12 @@ impl Camera {
         let o = self.to_world.transform_point3(o_cam);
         let d = self.to_world.transform_vector3(d_cam).normalize();
         let (we, pdf_dir, _) = self.importance_camera_space(o_cam, d_cam);
-        CameraSample { ray: Ray::new(o, d), we, pdf_pos: 1.0 / self.lens_area(), pdf_dir }
+        CameraSample {
+            ray: Ray::new(o, d),
+            we,
+            pdf_pos: 1.0 / self.lens_area(),
+            pdf_dir,
+        }
     }
 
     /// `(W_e, p_dir, raster)` of a camera-space ray from lens point `o` in unit direction `d`;
@@ -140,15 +171,29 @@ impl Camera {
         if cos <= 0.0 || !cos.is_finite() {
             return (0.0, 0.0, None);
         }
-        let q = if self.lens_radius > 0.0 { (o + d * (self.focal_distance / cos)) / self.focal_distance } else { d / cos };
-        let raster = [(q.x / self.half[0] + 1.0) / 2.0 * self.width as f64, (1.0 - q.y / self.half[1]) / 2.0 * self.height as f64];
-        let inside = raster[0] >= 0.0 && raster[0] < self.width as f64 && raster[1] >= 0.0 && raster[1] < self.height as f64;
+        let q = if self.lens_radius > 0.0 {
+            (o + d * (self.focal_distance / cos)) / self.focal_distance
+        } else {
+            d / cos
+        };
+        let raster = [
+            (q.x / self.half[0] + 1.0) / 2.0 * self.width as f64,
+            (1.0 - q.y / self.half[1]) / 2.0 * self.height as f64,
+        ];
+        let inside = raster[0] >= 0.0
+            && raster[0] < self.width as f64
+            && raster[1] >= 0.0
+            && raster[1] < self.height as f64;
         if !inside {
             return (0.0, 0.0, None);
         }
         let a = self.image_area();
         let c2 = cos * cos;
-        (1.0 / (a * self.lens_area() * c2 * c2), 1.0 / (a * c2 * cos), Some(raster))
+        (
+            1.0 / (a * self.lens_area() * c2 * c2),
+            1.0 / (a * c2 * cos),
+            Some(raster),
+        )
     }
 
     /// `(W_e, p_dir, raster)` of a ray leaving the lens point `p` in world direction `w`.
@@ -161,7 +206,11 @@ impl Camera {
     /// Sample a lens point toward scene point `r` (`lens` in `[0,1)²`), for connecting `r` to the
     /// camera.
     pub fn sample_connection(&self, r: DVec3, lens: [f64; 2]) -> Option<CameraConnection> {
-        let l = if self.lens_radius > 0.0 { concentric_disk(lens).map(|v| v * self.lens_radius) } else { [0.0, 0.0] };
+        let l = if self.lens_radius > 0.0 {
+            concentric_disk(lens).map(|v| v * self.lens_radius)
+        } else {
+            [0.0, 0.0]
+        };
         let p = self.to_world.transform_point3(DVec3::new(l[0], l[1], 0.0));
         let v = p - r;
         let dist = v.length();
@@ -173,7 +222,14 @@ impl Camera {
         let raster = raster?;
         let cos = self.forward().dot(-wi).abs();
         let pdf = dist * dist / (cos * self.lens_area());
-        Some(CameraConnection { p, wi, dist, we, pdf, raster })
+        Some(CameraConnection {
+            p,
+            wi,
+            dist,
+            we,
+            pdf,
+            raster,
+        })
     }
 
     /// The film and lens numbers that [`Camera::sample_ray`] maps to the ray leaving lens point `p`
@@ -182,7 +238,10 @@ impl Camera {
     pub fn invert(&self, p: DVec3, w: DVec3, free: [f64; 2]) -> Option<([f64; 2], [f64; 2])> {
         let (_, _, raster) = self.importance(p, w);
         let raster = raster?;
-        let film = [crate::math::clamp_unit(raster[0] / self.width as f64), crate::math::clamp_unit(raster[1] / self.height as f64)];
+        let film = [
+            crate::math::clamp_unit(raster[0] / self.width as f64),
+            crate::math::clamp_unit(raster[1] / self.height as f64),
+        ];
         let lens = if self.lens_radius > 0.0 {
             let o = self.to_camera.transform_point3(p);
             invert_concentric_disk([o.x / self.lens_radius, o.y / self.lens_radius])
@@ -205,7 +264,11 @@ pub fn concentric_disk(u: [f64; 2]) -> [f64; 2] {
     if a == 0.0 && b == 0.0 {
         return [0.0, 0.0];
     }
-    let (r, theta) = if a.abs() > b.abs() { (a, PI / 4.0 * (b / a)) } else { (b, PI / 2.0 - PI / 4.0 * (a / b)) };
+    let (r, theta) = if a.abs() > b.abs() {
+        (a, PI / 4.0 * (b / a))
+    } else {
+        (b, PI / 2.0 - PI / 4.0 * (a / b))
+    };
     [r * theta.cos(), r * theta.sin()]
 }
 
@@ -228,7 +291,10 @@ pub fn invert_concentric_disk(p: [f64; 2]) -> [f64; 2] {
     } else {
         ((phi - 3.0 * PI / 2.0) * r / (PI / 4.0), -r)
     };
-    [crate::math::clamp_unit((a + 1.0) / 2.0), crate::math::clamp_unit((b + 1.0) / 2.0)]
+    [
+        crate::math::clamp_unit((a + 1.0) / 2.0),
+        crate::math::clamp_unit((b + 1.0) / 2.0),
+    ]
 }
 
 #[cfg(test)]
@@ -237,8 +303,13 @@ mod tests {
 
     fn camera(lens_radius: f64) -> Camera {
         let desc = CameraDesc {
-            camera_to_world: DMat4::from_translation(DVec3::new(0.5, -1.0, 2.0)) * DMat4::from_rotation_y(0.3),
-            projection: Projection::Perspective { fov: 0.8, lens_radius, focal_distance: 3.0 },
+            camera_to_world: DMat4::from_translation(DVec3::new(0.5, -1.0, 2.0))
+                * DMat4::from_rotation_y(0.3),
+            projection: Projection::Perspective {
+                fov: 0.8,
+                lens_radius,
+                focal_distance: 3.0,
+            },
         };
         Camera::new(&desc, 64, 48).unwrap()
     }
@@ -247,11 +318,21 @@ mod tests {
     fn sampling_inverts_and_importance_normalises() {
         for lr in [0.0, 0.2] {
             let c = camera(lr);
-            for (film, lens) in [([0.1, 0.9], [0.3, 0.7]), ([0.5, 0.5], [0.9, 0.05]), ([0.99, 0.01], [0.5, 0.2])] {
+            for (film, lens) in [
+                ([0.1, 0.9], [0.3, 0.7]),
+                ([0.5, 0.5], [0.9, 0.05]),
+                ([0.99, 0.01], [0.5, 0.2]),
+            ] {
                 let s = c.sample_ray(film, lens);
                 let (f2, l2) = c.invert(s.ray.o, s.ray.d, lens).unwrap();
-                assert!((f2[0] - film[0]).abs() < 1e-9 && (f2[1] - film[1]).abs() < 1e-9, "{film:?} {f2:?}");
-                assert!((l2[0] - lens[0]).abs() < 1e-9 && (l2[1] - lens[1]).abs() < 1e-9, "{lens:?} {l2:?}");
+                assert!(
+                    (f2[0] - film[0]).abs() < 1e-9 && (f2[1] - film[1]).abs() < 1e-9,
+                    "{film:?} {f2:?}"
+                );
+                assert!(
+                    (l2[0] - lens[0]).abs() < 1e-9 && (l2[1] - lens[1]).abs() < 1e-9,
+                    "{lens:?} {l2:?}"
+                );
                 // W_e cos / (p_pos p_dir) = 1: uniform film sampling has unit weight.
                 let cos = s.ray.d.dot(c.forward());
                 assert!((s.we * cos / (s.pdf_pos * s.pdf_dir) - 1.0).abs() < 1e-9);
@@ -261,9 +342,18 @@ mod tests {
 
     #[test]
     fn concentric_disk_round_trip() {
-        for u in [[0.1, 0.2], [0.9, 0.4], [0.3, 0.95], [0.6, 0.05], [0.5, 0.5001]] {
+        for u in [
+            [0.1, 0.2],
+            [0.9, 0.4],
+            [0.3, 0.95],
+            [0.6, 0.05],
+            [0.5, 0.5001],
+        ] {
             let v = invert_concentric_disk(concentric_disk(u));
-            assert!((v[0] - u[0]).abs() < 1e-12 && (v[1] - u[1]).abs() < 1e-12, "{u:?} {v:?}");
+            assert!(
+                (v[0] - u[0]).abs() < 1e-12 && (v[1] - u[1]).abs() < 1e-12,
+                "{u:?} {v:?}"
+            );
         }
     }
 

@@ -6,11 +6,11 @@
 pub mod accel;
 pub mod bsdf;
 pub mod camera;
+pub mod error;
+pub mod film;
 pub mod geometry;
 pub mod integrators;
 pub mod light;
-pub mod error;
-pub mod film;
 pub mod math;
 pub mod path;
 pub mod sampler;

@@ -58,7 +58,12 @@ impl LightKind {
     /// Emitted power (for light selection), from the primitive's geometry where needed.
     pub fn power(&self) -> f64 {
         match *self {
-            LightKind::Area { radiance, two_sided, area, .. } => radiance.average() * area * PI * if two_sided { 2.0 } else { 1.0 },
+            LightKind::Area {
+                radiance,
+                two_sided,
+                area,
+                ..
+            } => radiance.average() * area * PI * if two_sided { 2.0 } else { 1.0 },
             LightKind::Point { intensity, .. } => 4.0 * PI * intensity.average(),
         }
     }
@@ -71,9 +76,17 @@ impl LightKind {
     /// Radiance leaving an area light at a point with normal `n` in direction `w`.
     pub fn radiance(&self, n: DVec3, w: DVec3) -> Rgb {
         match *self {
-            LightKind::Area { radiance, two_sided, .. } => {
+            LightKind::Area {
+                radiance,
+                two_sided,
+                ..
+            } => {
                 let c = n.dot(w);
-                if c > 0.0 || (two_sided && c < 0.0) { radiance } else { Rgb::BLACK }
+                if c > 0.0 || (two_sided && c < 0.0) {
+                    radiance
+                } else {
+                    Rgb::BLACK
+                }
             }
             LightKind::Point { .. } => Rgb::BLACK,
         }
@@ -82,7 +95,9 @@ impl LightKind {
     /// Sample a point uniformly on the light (area measure), as for next-event estimation.
     pub fn sample_point(&self, prims: &[Primitive], u: [f64; 2]) -> Option<(SurfacePoint, f64)> {
         match *self {
-            LightKind::Area { primitive, area, .. } => {
+            LightKind::Area {
+                primitive, area, ..
+            } => {
                 let p = match prims.get(primitive as usize)? {
                     Primitive::Triangle(t) => t.sample(u, primitive),
                     Primitive::Sphere(s) => s.sample(u, primitive),
@@ -90,19 +105,34 @@ impl LightKind {
                 Some((p, 1.0 / area))
             }
             LightKind::Point { position, .. } => Some((
-                SurfacePoint { p: position, n: DVec3::Z, uv: [0.0; 2], dpdu: DVec3::X, primitive: u32::MAX },
+                SurfacePoint {
+                    p: position,
+                    n: DVec3::Z,
+                    uv: [0.0; 2],
+                    dpdu: DVec3::X,
+                    primitive: u32::MAX,
+                },
                 1.0,
             )),
         }
     }
 
     /// Sample an emitted ray from the position numbers `u_pos` and direction numbers `u_dir`.
-    pub fn sample_emission(&self, prims: &[Primitive], u_pos: [f64; 2], u_dir: [f64; 2]) -> Option<EmissionSample> {
+    pub fn sample_emission(
+        &self,
+        prims: &[Primitive],
+        u_pos: [f64; 2],
+        u_dir: [f64; 2],
+    ) -> Option<EmissionSample> {
         match *self {
             LightKind::Area { two_sided, .. } => {
                 let (point, pdf_pos) = self.sample_point(prims, u_pos)?;
                 let (front, v) = if two_sided {
-                    if u_dir[0] < 0.5 { (true, 2.0 * u_dir[0]) } else { (false, 2.0 * u_dir[0] - 1.0) }
+                    if u_dir[0] < 0.5 {
+                        (true, 2.0 * u_dir[0])
+                    } else {
+                        (false, 2.0 * u_dir[0] - 1.0)
+                    }
                 } else {
                     (true, u_dir[0])
                 };
@@ -110,12 +140,35 @@ impl LightKind {
                 let n = if front { point.n } else { -point.n };
                 let w = Frame::from_normal(n).to_world(local);
                 let pdf_dir = local.z / PI * if two_sided { 0.5 } else { 1.0 };
-                Some(EmissionSample { point, w, le: self.radiance(point.n, w), pdf_pos, pdf_dir, delta_pos: false })
+                Some(EmissionSample {
+                    point,
+                    w,
+                    le: self.radiance(point.n, w),
+                    pdf_pos,
+                    pdf_dir,
+                    delta_pos: false,
+                })
             }
-            LightKind::Point { position, intensity } => {
+            LightKind::Point {
+                position,
+                intensity,
+            } => {
                 let w = uniform_sphere(u_dir);
-                let point = SurfacePoint { p: position, n: w, uv: [0.0; 2], dpdu: DVec3::X, primitive: u32::MAX };
-                Some(EmissionSample { point, w, le: intensity, pdf_pos: 1.0, pdf_dir: 1.0 / (4.0 * PI), delta_pos: true })
+                let point = SurfacePoint {
+                    p: position,
+                    n: w,
+                    uv: [0.0; 2],
+                    dpdu: DVec3::X,
+                    primitive: u32::MAX,
+                };
+                Some(EmissionSample {
+                    point,
+                    w,
+                    le: intensity,
+                    pdf_pos: 1.0,
+                    pdf_dir: 1.0 / (4.0 * PI),
+                    delta_pos: true,
+                })
             }
         }
     }
@@ -148,9 +201,19 @@ impl LightKind {
     /// The position and direction numbers that [`LightKind::sample_emission`] maps to the emission
     /// from surface point `p` (normal `n`) in direction `w`; numbers the light does not use are
     /// taken from `free`. `None` when the light cannot emit so.
-    pub fn invert_emission(&self, prims: &[Primitive], p: DVec3, w: DVec3, free: [f64; 4]) -> Option<([f64; 2], [f64; 2])> {
+    pub fn invert_emission(
+        &self,
+        prims: &[Primitive],
+        p: DVec3,
+        w: DVec3,
+        free: [f64; 4],
+    ) -> Option<([f64; 2], [f64; 2])> {
         match *self {
-            LightKind::Area { primitive, two_sided, .. } => {
+            LightKind::Area {
+                primitive,
+                two_sided,
+                ..
+            } => {
                 let (u_pos, n) = match prims.get(primitive as usize)? {
                     Primitive::Triangle(t) => {
                         let (b1, b2) = t.barycentrics(p);
@@ -165,7 +228,11 @@ impl LightKind {
                 let side_n = if c > 0.0 { n } else { -n };
                 let local = Frame::from_normal(side_n).to_local(w);
                 let [v, u1] = invert_cosine_hemisphere(local);
-                let u0 = if two_sided { if c > 0.0 { v / 2.0 } else { 0.5 + v / 2.0 } } else { v };
+                let u0 = if two_sided {
+                    if c > 0.0 { v / 2.0 } else { 0.5 + v / 2.0 }
+                } else {
+                    v
+                };
                 Some((u_pos, [clamp_unit(u0), u1]))
             }
             LightKind::Point { .. } => Some(([free[0], free[1]], invert_uniform_sphere(w))),
@@ -184,7 +251,10 @@ pub fn cosine_hemisphere(u: [f64; 2]) -> DVec3 {
 
 /// Inverse of [`cosine_hemisphere`] (eq. 32).
 pub fn invert_cosine_hemisphere(w: DVec3) -> [f64; 2] {
-    [clamp_unit(crate::math::phi(w) / (2.0 * PI)), clamp_unit(w.z * w.z)]
+    [
+        clamp_unit(crate::math::phi(w) / (2.0 * PI)),
+        clamp_unit(w.z * w.z),
+    ]
 }
 
 /// Uniform direction on the sphere: `z = 1 − 2 u0`, `φ = 2π u1`.
@@ -197,7 +267,10 @@ pub fn uniform_sphere(u: [f64; 2]) -> DVec3 {
 
 /// Inverse of [`uniform_sphere`].
 pub fn invert_uniform_sphere(w: DVec3) -> [f64; 2] {
-    [clamp_unit((1.0 - w.z) / 2.0), clamp_unit(crate::math::phi(w) / (2.0 * PI))]
+    [
+        clamp_unit((1.0 - w.z) / 2.0),
+        clamp_unit(crate::math::phi(w) / (2.0 * PI)),
+    ]
 }
 
 /// Choice of a light in proportion to power: a discrete distribution with its CDF, so the choice
@@ -262,23 +335,57 @@ mod tests {
     #[test]
     fn emission_inverts() {
         let prims = vec![
-            Primitive::Triangle(Triangle { p: [DVec3::ZERO, DVec3::X, DVec3::Y], uv: [[0.0; 2]; 3], flip: false }),
-            Primitive::Sphere(Sphere { center: DVec3::new(3.0, 0.0, 0.0), radius: 0.5, flip: false }),
+            Primitive::Triangle(Triangle {
+                p: [DVec3::ZERO, DVec3::X, DVec3::Y],
+                uv: [[0.0; 2]; 3],
+                flip: false,
+            }),
+            Primitive::Sphere(Sphere {
+                center: DVec3::new(3.0, 0.0, 0.0),
+                radius: 0.5,
+                flip: false,
+            }),
         ];
         let lights = [
-            LightKind::Area { primitive: 0, radiance: Rgb::WHITE, two_sided: false, area: 0.5 },
-            LightKind::Area { primitive: 0, radiance: Rgb::WHITE, two_sided: true, area: 0.5 },
-            LightKind::Area { primitive: 1, radiance: Rgb::WHITE, two_sided: false, area: PI },
-            LightKind::Point { position: DVec3::ONE, intensity: Rgb::WHITE },
+            LightKind::Area {
+                primitive: 0,
+                radiance: Rgb::WHITE,
+                two_sided: false,
+                area: 0.5,
+            },
+            LightKind::Area {
+                primitive: 0,
+                radiance: Rgb::WHITE,
+                two_sided: true,
+                area: 0.5,
+            },
+            LightKind::Area {
+                primitive: 1,
+                radiance: Rgb::WHITE,
+                two_sided: false,
+                area: PI,
+            },
+            LightKind::Point {
+                position: DVec3::ONE,
+                intensity: Rgb::WHITE,
+            },
         ];
         for l in lights {
             for (up, ud) in [([0.2, 0.7], [0.3, 0.6]), ([0.9, 0.1], [0.8, 0.25])] {
                 let e = l.sample_emission(&prims, up, ud).unwrap();
-                let (p2, d2) = l.invert_emission(&prims, e.point.p, e.w, [up[0], up[1], 0.0, 0.0]).unwrap();
+                let (p2, d2) = l
+                    .invert_emission(&prims, e.point.p, e.w, [up[0], up[1], 0.0, 0.0])
+                    .unwrap();
                 for (a, b) in up.iter().chain(&ud).zip(p2.iter().chain(&d2)) {
-                    assert!((a - b).abs() < 1e-9, "{l:?}: {up:?} {ud:?} -> {p2:?} {d2:?}");
+                    assert!(
+                        (a - b).abs() < 1e-9,
+                        "{l:?}: {up:?} {ud:?} -> {p2:?} {d2:?}"
+                    );
                 }
-                assert!((e.pdf_dir - l.pdf_direction(e.point.n, e.w)).abs() < 1e-12 || l.is_delta_position());
+                assert!(
+                    (e.pdf_dir - l.pdf_direction(e.point.n, e.w)).abs() < 1e-12
+                        || l.is_delta_position()
+                );
             }
         }
     }

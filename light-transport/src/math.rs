@@ -32,7 +32,11 @@ impl Frame {
             return Self::from_normal(n);
         }
         let s = s.normalize();
-        Self { s, t: n.cross(s), n }
+        Self {
+            s,
+            t: n.cross(s),
+            n,
+        }
     }
 
     /// World → local.
@@ -62,7 +66,11 @@ pub fn spherical_direction(sin_theta: f64, cos_theta: f64, phi: f64) -> DVec3 {
 #[inline]
 pub fn phi(w: DVec3) -> f64 {
     let p = w.y.atan2(w.x);
-    if p < 0.0 { p + 2.0 * std::f64::consts::PI } else { p }
+    if p < 0.0 {
+        p + 2.0 * std::f64::consts::PI
+    } else {
+        p
+    }
 }
 
 /// Clamp a number to `[0, 1)` (the primary-sample-space interval) after rounding.
@@ -83,10 +91,18 @@ mod tests {
 
     #[test]
     fn frames_are_orthonormal_for_every_normal() {
-        for n in [DVec3::Z, -DVec3::Z, DVec3::X, DVec3::new(0.3, -0.5, 0.8).normalize(), DVec3::new(1e-9, 0.0, -1.0).normalize()] {
+        for n in [
+            DVec3::Z,
+            -DVec3::Z,
+            DVec3::X,
+            DVec3::new(0.3, -0.5, 0.8).normalize(),
+            DVec3::new(1e-9, 0.0, -1.0).normalize(),
+        ] {
             let f = Frame::from_normal(n);
             assert!((f.s.length() - 1.0).abs() < 1e-12 && (f.t.length() - 1.0).abs() < 1e-12);
-            assert!(f.s.dot(f.t).abs() < 1e-12 && f.s.dot(n).abs() < 1e-12 && f.t.dot(n).abs() < 1e-12);
+            assert!(
+                f.s.dot(f.t).abs() < 1e-12 && f.s.dot(n).abs() < 1e-12 && f.t.dot(n).abs() < 1e-12
+            );
             let v = DVec3::new(0.2, 0.7, -0.4);
             assert!((f.to_world(f.to_local(v)) - v).length() < 1e-12);
             assert!((f.s.cross(f.t) - n).length() < 1e-12, "right-handed");

@@ -75,7 +75,10 @@ mod tests {
             for (i, wi) in w.iter().enumerate() {
                 let c = picks.iter().filter(|&&p| p == i).count() as f64;
                 let e = n as f64 * wi / total;
-                assert!(c >= e.floor() && c <= e.ceil(), "member {i}: {c} copies, expected {e}");
+                assert!(
+                    c >= e.floor() && c <= e.ceil(),
+                    "member {i}: {c} copies, expected {e}"
+                );
                 sum[i] += c;
             }
         }
@@ -83,7 +86,10 @@ mod tests {
             let e = n as f64 * wi / total;
             let mean = sum[i] / reps as f64;
             // Counts are within one of each other: variance ≤ 1/4.
-            assert!((mean - e).abs() < 5.0 * 0.5 / (reps as f64).sqrt(), "member {i}");
+            assert!(
+                (mean - e).abs() < 5.0 * 0.5 / (reps as f64).sqrt(),
+                "member {i}"
+            );
         }
     }
 

@@ -36,13 +36,26 @@ pub struct Common {
 }
 
 pub fn path_tracer(c: &Common) -> PathTracer {
-    PathTracer { max_edges: c.max_edges, heuristic: c.heuristic, roulette_after: None }
+    PathTracer {
+        max_edges: c.max_edges,
+        heuristic: c.heuristic,
+        roulette_after: None,
+    }
 }
 
 pub fn light_tracer(c: &Common) -> LightTracer {
-    LightTracer { walk: WalkSettings { max_edges: c.max_edges } }
+    LightTracer {
+        walk: WalkSettings {
+            max_edges: c.max_edges,
+        },
+    }
 }
 
 pub fn bdpt(c: &Common) -> Bdpt {
-    Bdpt { walk: WalkSettings { max_edges: c.max_edges }, heuristic: c.heuristic }
+    Bdpt {
+        walk: WalkSettings {
+            max_edges: c.max_edges,
+        },
+        heuristic: c.heuristic,
+    }
 }

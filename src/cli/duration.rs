@@ -28,14 +28,20 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
                 break;
             }
         }
-        let v: f64 = num.parse().map_err(|_| format!("bad duration {s:?}: expected a number before {unit:?}"))?;
+        let v: f64 = num
+            .parse()
+            .map_err(|_| format!("bad duration {s:?}: expected a number before {unit:?}"))?;
         num.clear();
         total += v * match unit.as_str() {
             "ms" => 1e-3,
             "s" => 1.0,
             "m" | "min" => 60.0,
             "h" => 3600.0,
-            _ => return Err(format!("bad duration {s:?}: unknown unit {unit:?} (use ms, s, m, h)")),
+            _ => {
+                return Err(format!(
+                    "bad duration {s:?}: unknown unit {unit:?} (use ms, s, m, h)"
+                ));
+            }
         };
     }
     if !num.is_empty() {

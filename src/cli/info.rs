@@ -1,7 +1,7 @@
 //! `charted info`: what a scene contains.
 
-use super::scene_arg;
 use super::CliError;
+use super::scene_arg;
 use clap::Args;
 use light_transport::light::LightKind;
 use light_transport::scene::MaterialDesc;
@@ -20,8 +20,18 @@ pub fn run(a: InfoArgs) -> Result<(), CliError> {
     let (tris, spheres) = scene.primitive_counts();
     println!("scene       {}", loaded.name);
     println!("image       {}×{}", scene.camera.width, scene.camera.height);
-    println!("camera      at {:.3}, looking {:.3}, lens radius {}", scene.camera.position(), scene.camera.forward(), scene.camera.lens_radius);
-    println!("geometry    {} meshes, {tris} triangles, {spheres} spheres; bounds {:.3} … {:.3}", d.meshes.len(), scene.bounds.0, scene.bounds.1);
+    println!(
+        "camera      at {:.3}, looking {:.3}, lens radius {}",
+        scene.camera.position(),
+        scene.camera.forward(),
+        scene.camera.lens_radius
+    );
+    println!(
+        "geometry    {} meshes, {tris} triangles, {spheres} spheres; bounds {:.3} … {:.3}",
+        d.meshes.len(),
+        scene.bounds.0,
+        scene.bounds.1
+    );
     let (area, point) = scene.lights.iter().fold((0, 0), |(a, p), l| match l {
         LightKind::Area { .. } => (a + 1, p),
         LightKind::Point { .. } => (a, p + 1),
@@ -40,9 +50,20 @@ pub fn run(a: InfoArgs) -> Result<(), CliError> {
         };
         *kinds.entry(k).or_insert(0) += 1;
     }
-    println!("materials   {}", kinds.iter().map(|(k, n)| format!("{n} {k}")).collect::<Vec<_>>().join(", "));
+    println!(
+        "materials   {}",
+        kinds
+            .iter()
+            .map(|(k, n)| format!("{n} {k}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
     println!("textures    {}", d.textures.len());
-    println!("load        parse {:.3} s, build {:.3} s", loaded.parse_time.as_secs_f64(), build.as_secs_f64());
+    println!(
+        "load        parse {:.3} s, build {:.3} s",
+        loaded.parse_time.as_secs_f64(),
+        build.as_secs_f64()
+    );
     for n in &scene.notes {
         println!("note        {n}");
     }

@@ -9,7 +9,6 @@ mod scene_arg;
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 
-
 /// Errors of the command line.
 #[derive(Debug, thiserror::Error)]
 pub enum CliError {

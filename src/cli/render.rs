@@ -1,10 +1,10 @@
 //! `charted render`: render a scene with one algorithm, with a progress bar, periodic writes of
 //! the current image, and a summary.
 
+use super::CliError;
 use super::algo::{self, Algo, Common};
 use super::duration::parse_duration;
 use super::scene_arg::{self, parse_resolution};
-use super::CliError;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use light_transport::film::{Film, Image, write_exr, write_png};
@@ -79,15 +79,24 @@ impl From<Heuristic> for MisHeuristic {
 
 /// Where the EXR and PNG go.
 pub fn output_paths(output: &Option<PathBuf>, scene: &str, algo: &str) -> (PathBuf, PathBuf) {
-    let exr = output.clone().unwrap_or_else(|| PathBuf::from(format!("out/{scene}-{algo}.exr")));
-    let exr = if exr.extension().is_some_and(|e| e == "png") { exr.with_extension("exr") } else { exr };
+    let exr = output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("out/{scene}-{algo}.exr")));
+    let exr = if exr.extension().is_some_and(|e| e == "png") {
+        exr.with_extension("exr")
+    } else {
+        exr
+    };
     (exr.clone(), exr.with_extension("png"))
 }
 
 /// Write an image as EXR and PNG, creating the folder.
 pub fn write_outputs(img: &Image, exr: &Path, png: &Path, exposure: f64) -> Result<(), CliError> {
     if let Some(dir) = exr.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| CliError::Io { path: dir.to_path_buf(), source })?;
+        std::fs::create_dir_all(dir).map_err(|source| CliError::Io {
+            path: dir.to_path_buf(),
+            source,
+        })?;
     }
     write_exr(img, exr)?;
     write_png(img, exposure, png)?;
@@ -95,7 +104,14 @@ pub fn write_outputs(img: &Image, exr: &Path, png: &Path, exposure: f64) -> Resu
 }
 
 /// Run one integrator on a scene with a progress bar and periodic writes.
-pub fn run_integrator<E: Estimator>(scene: &Scene, est: &E, budget: Budget, seed: u64, quiet: bool, mut every: impl FnMut(&Film)) -> (Film, RenderStats) {
+pub fn run_integrator<E: Estimator>(
+    scene: &Scene,
+    est: &E,
+    budget: Budget,
+    seed: u64,
+    quiet: bool,
+    mut every: impl FnMut(&Film),
+) -> (Film, RenderStats) {
     let bar = if quiet {
         ProgressBar::hidden()
     } else {
@@ -105,7 +121,8 @@ pub fn run_integrator<E: Estimator>(scene: &Scene, est: &E, budget: Budget, seed
         }
     };
     bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {msg}").unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let out = render(scene, est, budget, seed, |film, p| {
         match budget {
@@ -123,7 +140,10 @@ pub fn run_integrator<E: Estimator>(scene: &Scene, est: &E, budget: Budget, seed
 
 pub fn run(a: RenderArgs) -> Result<(), CliError> {
     if let Some(n) = a.threads {
-        rayon::ThreadPoolBuilder::new().num_threads(n).build_global().map_err(|e| CliError::Usage(format!("cannot set threads: {e}")))?;
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| CliError::Usage(format!("cannot set threads: {e}")))?;
     }
     if a.spp == Some(0) {
         return Err(CliError::Usage("--spp must be at least 1".into()));
@@ -139,7 +159,10 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
         eprintln!("note: {note}");
     }
     let (exr, png) = output_paths(&a.output, &loaded.name, a.algo.name());
-    let common = Common { max_edges: a.max_depth + 1, heuristic: a.mis.into() };
+    let common = Common {
+        max_edges: a.max_depth + 1,
+        heuristic: a.mis.into(),
+    };
     let mut last_write = Instant::now();
     let every = |film: &Film| {
         if last_write.elapsed() >= a.write_every {
@@ -148,8 +171,22 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
         }
     };
     let (film, stats) = match a.algo {
-        Algo::Pt => run_integrator(&scene, &algo::path_tracer(&common), budget, a.seed, a.quiet, every),
-        Algo::Lt => run_integrator(&scene, &algo::light_tracer(&common), budget, a.seed, a.quiet, every),
+        Algo::Pt => run_integrator(
+            &scene,
+            &algo::path_tracer(&common),
+            budget,
+            a.seed,
+            a.quiet,
+            every,
+        ),
+        Algo::Lt => run_integrator(
+            &scene,
+            &algo::light_tracer(&common),
+            budget,
+            a.seed,
+            a.quiet,
+            every,
+        ),
         Algo::Bdpt => run_integrator(&scene, &algo::bdpt(&common), budget, a.seed, a.quiet, every),
     };
     let t = Instant::now();
@@ -157,11 +194,38 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
     write_outputs(&img, &exr, &png, a.exposure)?;
     let write_time = t.elapsed();
     let secs = stats.elapsed.as_secs_f64().max(1e-9);
-    println!("scene      {} ({}×{}, {} triangles, {} spheres, {} lights)", loaded.name, scene.camera.width, scene.camera.height, scene.primitive_counts().0, scene.primitive_counts().1, scene.lights.len());
-    println!("algorithm  {} (max depth {}, {:?} heuristic)", a.algo.name(), a.max_depth, a.mis);
-    println!("time       parse {:.2} s, build {:.2} s, render {:.2} s, write {:.2} s", loaded.parse_time.as_secs_f64(), build_time.as_secs_f64(), secs, write_time.as_secs_f64());
-    println!("samples    {} spp, {:.2} M samples/s", stats.passes, stats.samples as f64 / secs / 1e6);
-    println!("rays       {:.1} M, {:.2} M rays/s", stats.rays as f64 / 1e6, stats.rays as f64 / secs / 1e6);
+    println!(
+        "scene      {} ({}×{}, {} triangles, {} spheres, {} lights)",
+        loaded.name,
+        scene.camera.width,
+        scene.camera.height,
+        scene.primitive_counts().0,
+        scene.primitive_counts().1,
+        scene.lights.len()
+    );
+    println!(
+        "algorithm  {} (max depth {}, {:?} heuristic)",
+        a.algo.name(),
+        a.max_depth,
+        a.mis
+    );
+    println!(
+        "time       parse {:.2} s, build {:.2} s, render {:.2} s, write {:.2} s",
+        loaded.parse_time.as_secs_f64(),
+        build_time.as_secs_f64(),
+        secs,
+        write_time.as_secs_f64()
+    );
+    println!(
+        "samples    {} spp, {:.2} M samples/s",
+        stats.passes,
+        stats.samples as f64 / secs / 1e6
+    );
+    println!(
+        "rays       {:.1} M, {:.2} M rays/s",
+        stats.rays as f64 / 1e6,
+        stats.rays as f64 / secs / 1e6
+    );
     println!("discarded  {} non-finite samples", stats.discarded);
     println!("wrote      {} and {}", exr.display(), png.display());
     Ok(())

@@ -19,7 +19,11 @@ pub struct Loaded {
 pub fn load(arg: &str) -> Result<Loaded, CliError> {
     let t = Instant::now();
     if let Some(d) = builtin::builtin(arg) {
-        return Ok(Loaded { name: arg.to_string(), description: d, parse_time: t.elapsed() });
+        return Ok(Loaded {
+            name: arg.to_string(),
+            description: d,
+            parse_time: t.elapsed(),
+        });
     }
     let path = Path::new(arg);
     if !path.exists() {
@@ -36,11 +40,18 @@ pub fn load(arg: &str) -> Result<Loaded, CliError> {
         .or_else(|| path.file_stem())
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
-    Ok(Loaded { name, description, parse_time: t.elapsed() })
+    Ok(Loaded {
+        name,
+        description,
+        parse_time: t.elapsed(),
+    })
 }
 
 /// Build the renderable scene, optionally at another resolution.
-pub fn build(loaded: &Loaded, resolution: Option<(usize, usize)>) -> Result<(Scene, Duration), CliError> {
+pub fn build(
+    loaded: &Loaded,
+    resolution: Option<(usize, usize)>,
+) -> Result<(Scene, Duration), CliError> {
     let t = Instant::now();
     let scene = Scene::new(&loaded.description, resolution)?;
     Ok((scene, t.elapsed()))
@@ -48,9 +59,17 @@ pub fn build(loaded: &Loaded, resolution: Option<(usize, usize)>) -> Result<(Sce
 
 /// Parse `WxH`.
 pub fn parse_resolution(s: &str) -> Result<(usize, usize), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("bad resolution {s:?}: expected WIDTHxHEIGHT"))?;
-    let w: usize = w.trim().parse().map_err(|_| format!("bad width in {s:?}"))?;
-    let h: usize = h.trim().parse().map_err(|_| format!("bad height in {s:?}"))?;
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("bad resolution {s:?}: expected WIDTHxHEIGHT"))?;
+    let w: usize = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad width in {s:?}"))?;
+    let h: usize = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height in {s:?}"))?;
     light_transport::scene::validate_resolution(w, h).map_err(|e| e.to_string())?;
     Ok((w, h))
 }

@@ -1,30 +1,71 @@
 //! BSDFs with four faces each — `sample`, `eval`, `pdf` and `invert` — built per hit from a
 //! material description.
 //!
-//! INTERFACE CONTRACT (implementation in progress; see the issue-4 helper brief):
+//! # Interface contract
 //!
 //! * Directions are **world-space unit vectors pointing away from the surface**. `wo` is the
 //!   direction the random walk arrived from (toward the previous vertex); `wi` the new direction.
 //! * [`TransportMode::Radiance`] (camera subpaths) evaluates `f(wo, wi)` for light flowing from
 //!   `wi` to `wo`; [`TransportMode::Importance`] (light subpaths) evaluates the adjoint. They differ
-//!   only for refraction (the `1/η²` radiance scaling).
+//!   only for refraction: radiance is scaled by `(η_o/η_i)²` (`η_o`, `η_i` the indices on the sides
+//!   of `wo` and `wi`), importance is not (Veach 1997 ch. 5, pbrt-v3/v4). Hence
+//!   `f_radiance(wo, wi) = f_importance(wi, wo)` and `f_radiance(wo, wi)/η_o² = f_radiance(wi, wo)/η_i²`.
 //! * `eval` and `pdf` cover the non-delta lobes only (delta lobes evaluate to zero there);
-//!   `pdf(wo, wi)` is the solid-angle density of `sample` producing `wi` from `wo`, so the reverse
-//!   density is `pdf(wi, wo)`.
+//!   `pdf(wo, wi)` is the solid-angle density of `sample` producing `wi` from `wo` (all non-delta
+//!   lobes together: `Σ_j P_j(wo) pdf_j(wo, wi)`), so the reverse density is `pdf(wi, wo)`. The
+//!   density integrates to the probability that `sample` succeeds with a non-delta direction
+//!   (GGX samples reflected below the horizon fail).
 //! * `sample(wo, u_lobe, u, mode)` reads the vertex block's lobe number and two direction numbers
-//!   (see [`crate::sampler`]). For a delta lobe it returns `delta = true`, `pdf` = the probability of
-//!   choosing that lobe, and `f` such that `f · |cos θ_i| / pdf` is the lobe's weight.
+//!   (see [`crate::sampler`]). A non-delta sample returns `f = eval(wo, wi)` and `pdf = pdf(wo, wi)`
+//!   (one-sample MIS over the lobes). A delta sample returns `delta = true`, `pdf` = the
+//!   probability of choosing it (summed over the delta lobes and branches producing that same
+//!   direction, e.g. a mirror mixed with glass) and `f` such that `f · |cos θ_i| / pdf` is its
+//!   weight; [`Bsdf::eval_delta`] reproduces both for a given pair.
 //! * `invert(wo, wi, delta, rng)` draws `(u_lobe, u0, u1)` from the **exact conditional law** of the
 //!   numbers given that `sample` produced `wi` (DESIGN §3): a lobe is chosen with probability
-//!   proportional to its share of the density at `wi` (for delta: among the delta lobes that produce
-//!   `wi`), `u_lobe` is uniform within that lobe's interval, and numbers a lobe does not use are
-//!   uniform. `None` when `wi` cannot be produced.
+//!   proportional to its share of the density at `wi` (`P_j pdf_j / Σ_k P_k pdf_k`; for delta:
+//!   among the delta lobes that produce `wi`, by probability), `u_lobe` is uniform within that
+//!   lobe's interval (or the branch's sub-interval for dielectrics), the lobe's own inverse gives
+//!   `(u0, u1)`, and numbers a lobe does not use are uniform. `None` when `wi` cannot be produced.
 //! * The local frame's normal is the **geometric** normal; reflection lobes are two-sided (they
 //!   work for `wo` below the surface by mirroring), dielectrics choose `η` by the side of `wo`.
+//!
+//! # Models and conventions
+//!
+//! | material | lobes | file |
+//! |---|---|---|
+//! | `matte` | Lambert, `(θ, φ) = (acos √u1, 2π u0)` | [`lambert`] |
+//! | `metal` | GGX reflection, conductor Fresnel, anisotropic, visible normals | [`conductor`], [`microfacet`], [`fresnel`] |
+//! | `mirror`, roughness-0 `metal` | delta reflection | [`mirror`] |
+//! | `glass` (roughness 0 or `η = 1`) | delta reflection + refraction by Fresnel | [`dielectric`] |
+//! | `glass` (rough) | GGX reflection + transmission (Walter 2007), visible normals | [`rough_dielectric`] |
+//! | `plastic`/`substrate` | Lambert + GGX dielectric coating (pbrt-v3 plastic) | [`layered`] |
+//! | `mix` | flattened lobes, per-channel amounts | [`material`], [`lobes`] |
+//!
+//! Smith masking is **height-correlated**, `G2 = 1/(1 + Λ(wo) + Λ(wi))`, in every GGX lobe; the
+//! sampling density uses the visible-normal distribution with `G1(wo)` (Heitz 2018). Roughness
+//! values are GGX `α` (the loader applies pbrt's remapping); positive values below
+//! [`microfacet::MIN_ALPHA`] are clamped to it, zero on both axes means a delta lobe. Lobe choice:
+//! see [`lobes`] (groups of mixes) and [`layered`] (Fresnel-weighted albedos).
+
+pub mod conductor;
+pub mod dielectric;
+pub mod fresnel;
+pub mod lambert;
+pub mod layered;
+pub mod lobes;
+pub mod material;
+pub mod microfacet;
+pub mod mirror;
+pub mod rough_dielectric;
+pub mod texture;
 
 use crate::math::{DVec3, Frame};
+use crate::scene::{MaterialDesc, TextureDesc};
 use crate::spectrum::Rgb;
+use lobes::{LobeKind, Lobes, MAX_LOBES};
 use mcmc_core::ChainRng;
+use mcmc_core::rng::uniform;
 
 /// Which quantity a random walk carries.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,36 +89,319 @@ pub struct BsdfSample {
     pub delta: bool,
 }
 
+/// What kinds of lobes a BSDF has (for manifold exploration and path classification).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LobeSummary {
+    /// A Lambertian lobe.
+    pub diffuse: bool,
+    /// A rough (GGX) lobe.
+    pub glossy: bool,
+    /// A delta lobe.
+    pub specular: bool,
+    /// A lobe that transmits (dielectric).
+    pub transmission: bool,
+    /// Smallest GGX `α` of the glossy lobes.
+    pub min_alpha: Option<f64>,
+}
+
+/// Per-lobe shares of the density at a direction (see [`Bsdf::lobe_weights`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LobeWeights {
+    /// `P_j(wo) pdf_j(wo, wi)` (non-delta) or `P_j(wo) · branch probability` (delta), per lobe.
+    pub weights: [f64; MAX_LOBES],
+    /// Number of lobes.
+    pub len: usize,
+}
+
+impl LobeWeights {
+    /// The weights.
+    pub fn as_slice(&self) -> &[f64] {
+        &self.weights[..self.len]
+    }
+    /// Their sum (the density, or the delta probability, of `wi`).
+    pub fn total(&self) -> f64 {
+        self.as_slice().iter().sum()
+    }
+}
+
 /// A BSDF at one surface point.
 #[derive(Clone, Debug)]
 pub struct Bsdf {
-    /// Shading frame (normal = geometric normal).
+    /// Shading frame (normal = geometric normal; first tangent = anisotropy direction).
     pub frame: Frame,
+    lobes: Lobes,
+}
+
+/// A world direction in the local frame, normalised; `None` when degenerate.
+fn local(frame: &Frame, w: DVec3) -> Option<DVec3> {
+    let l = frame.to_local(w);
+    let len2 = l.length_squared();
+    (len2 > 0.0 && len2.is_finite()).then(|| l / len2.sqrt())
 }
 
 impl Bsdf {
-    /// Sample a direction.
-    pub fn sample(&self, _wo: DVec3, _u_lobe: f64, _u: [f64; 2], _mode: TransportMode) -> Option<BsdfSample> {
-        None
+    /// The BSDF of `materials[material]` at texture coordinates `uv` with local frame `frame`
+    /// (use [`Frame::from_normal_tangent`] with `dpdu` for anisotropic materials).
+    ///
+    /// Errors: an out-of-range material or texture index, invalid parameters (negative or
+    /// non-finite reflectances, roughness or indices), mixes nested deeper than 16 or cyclic, or
+    /// more than [`lobes::MAX_LOBES`] lobes after flattening mixes.
+    ///
+    /// ```
+    /// use light_transport::bsdf::{Bsdf, TransportMode};
+    /// use light_transport::math::{DVec3, Frame};
+    /// use light_transport::scene::{MaterialDesc, RgbTexture};
+    /// use light_transport::Rgb;
+    /// let m = [MaterialDesc::Matte { kd: RgbTexture::Constant(Rgb::splat(0.5)) }];
+    /// let bsdf = Bsdf::from_material(&m, &[], 0, [0.0, 0.0], Frame::from_normal(DVec3::Z)).unwrap();
+    /// let s = bsdf.sample(DVec3::Z, 0.3, [0.2, 0.7], TransportMode::Radiance).unwrap();
+    /// assert!((s.f[0] * s.wi.z / s.pdf - 0.5).abs() < 1e-12);
+    /// let u = bsdf.invert(DVec3::Z, s.wi, false, &mut mcmc_core::rng::stream(1, 0)).unwrap();
+    /// assert!((u[1] - 0.2).abs() < 1e-12 && (u[2] - 0.7).abs() < 1e-12);
+    /// ```
+    pub fn from_material(
+        materials: &[MaterialDesc],
+        textures: &[TextureDesc],
+        material: usize,
+        uv: [f64; 2],
+        frame: Frame,
+    ) -> crate::Result<Bsdf> {
+        let mut b = material::Builder::new(materials, textures, material, uv);
+        b.add(material, Rgb::WHITE, 1.0, 0)?;
+        let mut lobes = b.lobes;
+        lobes.finish();
+        Ok(Bsdf { frame, lobes })
     }
+
+    /// Sample a direction from the lobe number `u_lobe` and direction numbers `u`.
+    pub fn sample(
+        &self,
+        wo: DVec3,
+        u_lobe: f64,
+        u: [f64; 2],
+        mode: TransportMode,
+    ) -> Option<BsdfSample> {
+        let wo = local(&self.frame, wo)?;
+        if wo.z == 0.0 {
+            return None;
+        }
+        let p = self.lobes.probabilities(wo);
+        let (j, u_sub) = self.lobes.choose(&p, u_lobe)?;
+        let s = self.lobes.sample(j, wo, u_sub, u, mode)?;
+        // Value and density at the world direction handed out, so that `eval` and `pdf` called
+        // with it reproduce them exactly.
+        let wi = self.frame.to_world(s.wi);
+        let wl = local(&self.frame, wi)?;
+        let (f, pdf) = if s.delta {
+            let t = self.lobes.delta_terms(&p, wo, wl, mode);
+            t.iter()
+                .fold((Rgb::BLACK, 0.0), |(f, q), (tf, tq)| (f + *tf, q + tq))
+        } else {
+            let t = self.lobes.pdf_terms(&p, wo, wl);
+            (self.lobes.eval(wo, wl, mode), t.iter().sum())
+        };
+        if !(pdf > 0.0) || !pdf.is_finite() || !f.is_finite() {
+            return None;
+        }
+        Some(BsdfSample {
+            wi,
+            f,
+            pdf,
+            delta: s.delta,
+        })
+    }
+
     /// Evaluate the non-delta part.
-    pub fn eval(&self, _wo: DVec3, _wi: DVec3, _mode: TransportMode) -> Rgb {
-        Rgb::BLACK
+    pub fn eval(&self, wo: DVec3, wi: DVec3, mode: TransportMode) -> Rgb {
+        match (local(&self.frame, wo), local(&self.frame, wi)) {
+            (Some(wo), Some(wi)) => {
+                let f = self.lobes.eval(wo, wi, mode);
+                if f.is_finite() { f } else { Rgb::BLACK }
+            }
+            _ => Rgb::BLACK,
+        }
     }
+
     /// Density of sampling `wi` from `wo` (non-delta part).
-    pub fn pdf(&self, _wo: DVec3, _wi: DVec3) -> f64 {
-        0.0
+    pub fn pdf(&self, wo: DVec3, wi: DVec3) -> f64 {
+        let p = self.lobe_weights(wo, wi, false).total();
+        if p.is_finite() { p } else { 0.0 }
     }
+
+    /// `(f, probability)` of the delta lobes producing `wi` from `wo`, as [`Bsdf::sample`] would
+    /// report them; `None` when no delta lobe produces `wi`.
+    pub fn eval_delta(&self, wo: DVec3, wi: DVec3, mode: TransportMode) -> Option<BsdfSample> {
+        let (lo, li) = (local(&self.frame, wo)?, local(&self.frame, wi)?);
+        let p = self.lobes.probabilities(lo);
+        let t = self.lobes.delta_terms(&p, lo, li, mode);
+        let (f, pdf) = t
+            .iter()
+            .fold((Rgb::BLACK, 0.0), |(f, q), (tf, tq)| (f + *tf, q + tq));
+        (pdf > 0.0 && pdf.is_finite() && f.is_finite()).then_some(BsdfSample {
+            wi,
+            f,
+            pdf,
+            delta: true,
+        })
+    }
+
+    /// Each lobe's share of the density at `wi` (`delta = false`: `P_j pdf_j`) or of the delta
+    /// probability (`delta = true`): the branch probabilities of [`Bsdf::invert`].
+    pub fn lobe_weights(&self, wo: DVec3, wi: DVec3, delta: bool) -> LobeWeights {
+        let len = self.lobes.as_slice().len();
+        let mut out = LobeWeights {
+            weights: [0.0; MAX_LOBES],
+            len,
+        };
+        let (Some(wo), Some(wi)) = (local(&self.frame, wo), local(&self.frame, wi)) else {
+            return out;
+        };
+        let p = self.lobes.probabilities(wo);
+        if delta {
+            let t = self.lobes.delta_terms(&p, wo, wi, TransportMode::Radiance);
+            for (o, (_, q)) in out.weights.iter_mut().zip(t.iter()) {
+                *o = *q;
+            }
+        } else {
+            out.weights = self.lobes.pdf_terms(&p, wo, wi);
+        }
+        for w in &mut out.weights {
+            if !w.is_finite() {
+                *w = 0.0;
+            }
+        }
+        out
+    }
+
+    /// The numbers `(u_lobe, u0, u1)` of lobe `lobe` producing `wi`: `u_lobe` within the lobe's
+    /// interval, drawn from the lobe's own conditional law. [`Bsdf::invert`] is this after choosing
+    /// `lobe` by [`Bsdf::lobe_weights`].
+    pub fn invert_lobe(
+        &self,
+        wo: DVec3,
+        wi: DVec3,
+        lobe: usize,
+        rng: &mut ChainRng,
+    ) -> Option<[f64; 3]> {
+        let (wo, wi) = (local(&self.frame, wo)?, local(&self.frame, wi)?);
+        if lobe >= self.lobes.as_slice().len() {
+            return None;
+        }
+        let p = self.lobes.probabilities(wo);
+        if !(p[lobe] > 0.0) {
+            return None;
+        }
+        let [u_sub, u0, u1] = self.lobes.invert(lobe, wo, wi, rng)?;
+        Some([self.lobes.lobe_number(&p, lobe, u_sub), u0, u1])
+    }
+
     /// Exact conditional inverse of `sample`.
-    pub fn invert(&self, _wo: DVec3, _wi: DVec3, _delta: bool, _rng: &mut ChainRng) -> Option<[f64; 3]> {
-        None
+    pub fn invert(
+        &self,
+        wo: DVec3,
+        wi: DVec3,
+        delta: bool,
+        rng: &mut ChainRng,
+    ) -> Option<[f64; 3]> {
+        let w = self.lobe_weights(wo, wi, delta);
+        let total = w.total();
+        if !(total > 0.0) || !total.is_finite() {
+            return None;
+        }
+        let target = uniform(rng) * total;
+        let mut acc = 0.0;
+        let mut chosen = None;
+        for (j, &v) in w.as_slice().iter().enumerate() {
+            if v > 0.0 {
+                chosen = Some(j);
+                acc += v;
+                if target < acc {
+                    break;
+                }
+            }
+        }
+        self.invert_lobe(wo, wi, chosen?, rng)
     }
+
     /// Whether some lobe is a delta (specular) lobe.
     pub fn has_delta(&self) -> bool {
-        false
+        self.lobes.as_slice().iter().any(|l| l.kind.is_delta())
     }
+
     /// Whether every lobe is a delta lobe (connections through this vertex are impossible).
     pub fn is_delta_only(&self) -> bool {
-        false
+        let l = self.lobes.as_slice();
+        !l.is_empty() && l.iter().all(|l| l.kind.is_delta())
+    }
+
+    /// Whether the BSDF has no lobe at all (black: every sample fails, `eval` is zero).
+    pub fn is_black(&self) -> bool {
+        self.lobes.as_slice().is_empty()
+    }
+
+    /// Whether some lobe is diffuse or glossy (not delta).
+    pub fn has_non_delta(&self) -> bool {
+        self.lobes.as_slice().iter().any(|l| !l.kind.is_delta())
+    }
+
+    /// Smallest GGX `α` (over both axes) of the glossy lobes; `None` without glossy lobes.
+    pub fn roughness(&self) -> Option<f64> {
+        self.lobes
+            .as_slice()
+            .iter()
+            .filter_map(|l| l.kind.alpha())
+            .map(|(a, b)| a.min(b))
+            .reduce(f64::min)
+    }
+
+    /// The kinds of lobes present.
+    pub fn summary(&self) -> LobeSummary {
+        let mut s = LobeSummary {
+            min_alpha: self.roughness(),
+            ..LobeSummary::default()
+        };
+        for l in self.lobes.as_slice() {
+            match l.kind {
+                LobeKind::Lambert(_) => s.diffuse = true,
+                LobeKind::Glossy(_) => s.glossy = true,
+                LobeKind::Specular(_) => s.specular = true,
+                LobeKind::Dielectric(_) => {
+                    s.specular = true;
+                    s.transmission = true;
+                }
+                LobeKind::RoughDielectric(_) => {
+                    s.glossy = true;
+                    s.transmission = true;
+                }
+            }
+        }
+        s
+    }
+
+    /// Index of refraction (inside over outside) of the first dielectric lobe.
+    pub fn eta(&self) -> Option<f64> {
+        self.lobes.as_slice().iter().find_map(|l| match l.kind {
+            LobeKind::Dielectric(d) => Some(d.eta),
+            LobeKind::RoughDielectric(d) => Some(d.eta),
+            _ => None,
+        })
+    }
+
+    /// The microfacet normal (world space, on `wo`'s side) that maps `wo` to `wi`: the half vector
+    /// for a reflection, the generalised half vector `±normalize(η_o wo + η_i wi)` for a
+    /// refraction (using [`Bsdf::eta`]); `None` when undefined.
+    pub fn microfacet_normal(&self, wo: DVec3, wi: DVec3) -> Option<DVec3> {
+        let (lo, li) = (local(&self.frame, wo)?, local(&self.frame, wi)?);
+        let m = if lobes::same_side(lo, li) {
+            let h = lo + li;
+            let len2 = h.length_squared();
+            if !(len2 > 0.0 && len2.is_finite()) {
+                return None;
+            }
+            h / len2.sqrt()
+        } else {
+            rough_dielectric::microfacet_normal(lo, li, self.eta()?)?
+        };
+        Some(self.frame.to_world(m))
     }
 }

@@ -22,7 +22,10 @@ fn check(a: &Image, r: &Image) -> Result<()> {
     if a.width != r.width || a.height != r.height {
         return Err(Error::InvalidParameter {
             name: "reference".into(),
-            reason: format!("size {}×{} differs from the image's {}×{}", r.width, r.height, a.width, a.height),
+            reason: format!(
+                "size {}×{} differs from the image's {}×{}",
+                r.width, r.height, a.width, a.height
+            ),
         });
     }
     Ok(())
@@ -41,7 +44,12 @@ pub fn metrics(image: &Image, reference: &Image) -> Result<ErrorMetrics> {
             ae += d.abs();
         }
     }
-    Ok(ErrorMetrics { mse: se / n, rmse: (se / n).sqrt(), rel_mse: rel / n, mae: ae / n })
+    Ok(ErrorMetrics {
+        mse: se / n,
+        rmse: (se / n).sqrt(),
+        rel_mse: rel / n,
+        mae: ae / n,
+    })
 }
 
 /// A false-colour image of the per-pixel relative error `|x − r| / (|r| + 0.1)` (mean over
@@ -53,7 +61,10 @@ pub fn error_image(image: &Image, reference: &Image, scale: f64) -> Result<Vec<[
         .iter()
         .zip(&reference.pixels)
         .map(|(a, r)| {
-            let e = (0..3).map(|c| (a[c] - r[c]).abs() / (r[c].abs() + 0.1)).sum::<f64>() / 3.0;
+            let e = (0..3)
+                .map(|c| (a[c] - r[c]).abs() / (r[c].abs() + 0.1))
+                .sum::<f64>()
+                / 3.0;
             false_colour(e / scale)
         })
         .collect())

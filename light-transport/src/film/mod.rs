@@ -51,7 +51,8 @@ impl Film {
     /// The pixel containing raster position `r`.
     pub fn pixel_of(&self, r: [f64; 2]) -> Option<usize> {
         let (x, y) = (r[0].floor(), r[1].floor());
-        (x >= 0.0 && y >= 0.0 && (x as usize) < self.width && (y as usize) < self.height).then(|| y as usize * self.width + x as usize)
+        (x >= 0.0 && y >= 0.0 && (x as usize) < self.width && (y as usize) < self.height)
+            .then(|| y as usize * self.width + x as usize)
     }
 
     /// Add one camera-sample estimate to pixel `index`.
@@ -93,7 +94,11 @@ impl Film {
     pub fn image(&self) -> Vec<Rgb> {
         (0..self.pixel_sum.len())
             .map(|i| {
-                let mut v = if self.pixel_count[i] > 0.0 { self.pixel_sum[i] / self.pixel_count[i] } else { Rgb::BLACK };
+                let mut v = if self.pixel_count[i] > 0.0 {
+                    self.pixel_sum[i] / self.pixel_count[i]
+                } else {
+                    Rgb::BLACK
+                };
                 if self.splat_scale > 0.0 {
                     v += self.splat_sum[i] / self.splat_scale;
                 }
@@ -122,7 +127,11 @@ pub struct Image {
 impl Image {
     /// The film's current estimate.
     pub fn from_film(film: &Film) -> Self {
-        Self { width: film.width, height: film.height, pixels: film.image() }
+        Self {
+            width: film.width,
+            height: film.height,
+            pixels: film.image(),
+        }
     }
 
     /// Average of all pixels.

@@ -36,5 +36,9 @@ impl Ray {
 pub fn offset_origin(p: DVec3, n: DVec3, w: DVec3) -> DVec3 {
     let scale = p.abs().max_element().max(1.0);
     let eps = 1e-9 * scale;
-    if w.dot(n) >= 0.0 { p + n * eps } else { p - n * eps }
+    if w.dot(n) >= 0.0 {
+        p + n * eps
+    } else {
+        p - n * eps
+    }
 }

@@ -56,7 +56,9 @@ impl Sphere {
         let p = self.center + n * self.radius;
         let phi = crate::math::phi(n);
         let uv = [phi / (2.0 * PI), (n.z.clamp(-1.0, 1.0)).acos() / PI];
-        let dpdu = DVec3::new(-n.y, n.x, 0.0).try_normalize().unwrap_or(DVec3::X);
+        let dpdu = DVec3::new(-n.y, n.x, 0.0)
+            .try_normalize()
+            .unwrap_or(DVec3::X);
         SurfacePoint {
             p,
             n: if self.flip { -n } else { n },
@@ -71,7 +73,10 @@ impl Sphere {
         let z = 1.0 - 2.0 * u[0];
         let r = (1.0 - z * z).max(0.0).sqrt();
         let phi = 2.0 * PI * u[1];
-        self.point(self.center + DVec3::new(r * phi.cos(), r * phi.sin(), z) * self.radius, primitive)
+        self.point(
+            self.center + DVec3::new(r * phi.cos(), r * phi.sin(), z) * self.radius,
+            primitive,
+        )
     }
 
     /// The numbers [`Sphere::sample`] maps to the point `p` on the sphere.
@@ -90,18 +95,39 @@ mod tests {
 
     #[test]
     fn intersections_from_outside_and_inside() {
-        let s = Sphere { center: DVec3::new(0.0, 0.0, 5.0), radius: 1.0, flip: false };
+        let s = Sphere {
+            center: DVec3::new(0.0, 0.0, 5.0),
+            radius: 1.0,
+            flip: false,
+        };
         assert!((s.intersect(DVec3::ZERO, DVec3::Z, f64::INFINITY).unwrap() - 4.0).abs() < 1e-12);
-        assert!((s.intersect(DVec3::new(0.0, 0.0, 5.0), DVec3::Z, f64::INFINITY).unwrap() - 1.0).abs() < 1e-12);
+        assert!(
+            (s.intersect(DVec3::new(0.0, 0.0, 5.0), DVec3::Z, f64::INFINITY)
+                .unwrap()
+                - 1.0)
+                .abs()
+                < 1e-12
+        );
         assert!(s.intersect(DVec3::ZERO, DVec3::X, f64::INFINITY).is_none());
         // Far away and tiny: the stable discriminant still finds it.
-        let far = Sphere { center: DVec3::new(0.0, 0.0, 1e6), radius: 1e-3, flip: false };
-        assert!(far.intersect(DVec3::ZERO, DVec3::Z, f64::INFINITY).is_some());
+        let far = Sphere {
+            center: DVec3::new(0.0, 0.0, 1e6),
+            radius: 1e-3,
+            flip: false,
+        };
+        assert!(
+            far.intersect(DVec3::ZERO, DVec3::Z, f64::INFINITY)
+                .is_some()
+        );
     }
 
     #[test]
     fn sampling_inverts() {
-        let s = Sphere { center: DVec3::new(1.0, 2.0, 3.0), radius: 0.5, flip: false };
+        let s = Sphere {
+            center: DVec3::new(1.0, 2.0, 3.0),
+            radius: 0.5,
+            flip: false,
+        };
         for u in [[0.1, 0.9], [0.5, 0.25], [0.97, 0.03]] {
             let p = s.sample(u, 0);
             let v = s.invert(p.p);

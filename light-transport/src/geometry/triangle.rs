@@ -18,13 +18,17 @@ pub struct Triangle {
 impl Triangle {
     /// Unit geometric normal `(p1 − p0) × (p2 − p0)` (flipped if requested).
     pub fn normal(&self) -> DVec3 {
-        let n = (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0]).normalize();
+        let n = (self.p[1] - self.p[0])
+            .cross(self.p[2] - self.p[0])
+            .normalize();
         if self.flip { -n } else { n }
     }
 
     /// Area.
     pub fn area(&self) -> f64 {
-        0.5 * (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0]).length()
+        0.5 * (self.p[1] - self.p[0])
+            .cross(self.p[2] - self.p[0])
+            .length()
     }
 
     /// Intersection parameter and barycentrics `(b1, b2)` of a ray, if it hits within `(0, t_max)`.
@@ -122,11 +126,22 @@ mod tests {
     #[test]
     fn hits_and_misses() {
         let t = tri();
-        let (d, _, _) = t.intersect(DVec3::new(0.2, 0.2, 1.0), -DVec3::Z, f64::INFINITY).unwrap();
+        let (d, _, _) = t
+            .intersect(DVec3::new(0.2, 0.2, 1.0), -DVec3::Z, f64::INFINITY)
+            .unwrap();
         assert!((d - 1.0).abs() < 1e-15);
-        assert!(t.intersect(DVec3::new(0.8, 0.8, 1.0), -DVec3::Z, f64::INFINITY).is_none());
-        assert!(t.intersect(DVec3::new(0.2, 0.2, 1.0), DVec3::Z, f64::INFINITY).is_none());
-        assert!(t.intersect(DVec3::new(0.2, 0.2, 1.0), -DVec3::Z, 0.5).is_none());
+        assert!(
+            t.intersect(DVec3::new(0.8, 0.8, 1.0), -DVec3::Z, f64::INFINITY)
+                .is_none()
+        );
+        assert!(
+            t.intersect(DVec3::new(0.2, 0.2, 1.0), DVec3::Z, f64::INFINITY)
+                .is_none()
+        );
+        assert!(
+            t.intersect(DVec3::new(0.2, 0.2, 1.0), -DVec3::Z, 0.5)
+                .is_none()
+        );
     }
 
     #[test]
@@ -136,7 +151,10 @@ mod tests {
             let p = t.sample(u, 0);
             let (b1, b2) = t.barycentrics(p.p);
             let v = t.invert(b1, b2);
-            assert!((v[0] - u[0]).abs() < 1e-12 && (v[1] - u[1]).abs() < 1e-12, "{u:?} -> {v:?}");
+            assert!(
+                (v[0] - u[0]).abs() < 1e-12 && (v[1] - u[1]).abs() < 1e-12,
+                "{u:?} -> {v:?}"
+            );
         }
     }
 }

@@ -2,7 +2,9 @@
 //! power heuristic. Strategy `(1, 1)` is left to `(0, 2)` as in pbrt; `(s, 1)` strategies splat.
 
 use super::{Estimator, Splat};
-use crate::path::{MisHeuristic, Vertex, WalkSettings, camera_subpath, connect, light_subpath, mis_weight};
+use crate::path::{
+    MisHeuristic, Vertex, WalkSettings, camera_subpath, connect, light_subpath, mis_weight,
+};
 use crate::sampler::IndependentStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -24,7 +26,13 @@ pub struct Bdpt {
 impl Bdpt {
     /// Sum of the MIS-weighted contributions of every strategy of a pair of subpaths: the pixel
     /// estimate is returned, `(s, 1)` contributions are pushed to `splats`.
-    pub fn evaluate(&self, scene: &Scene, light: &[Vertex], camera: &[Vertex], splats: &mut Vec<Splat>) -> Rgb {
+    pub fn evaluate(
+        &self,
+        scene: &Scene,
+        light: &[Vertex],
+        camera: &[Vertex],
+        splats: &mut Vec<Splat>,
+    ) -> Rgb {
         let mut l = Rgb::BLACK;
         for t in 1..=camera.len() {
             for s in 0..=light.len() {
@@ -32,7 +40,9 @@ impl Bdpt {
                 if (s == 1 && t == 1) || edges < 1 || edges > self.walk.max_edges {
                     continue;
                 }
-                let Some(c) = connect(scene, light, camera, s, t) else { continue };
+                let Some(c) = connect(scene, light, camera, s, t) else {
+                    continue;
+                };
                 let w = mis_weight(scene, light, camera, s, t, self.heuristic);
                 if w == 0.0 {
                     continue;
@@ -48,10 +58,22 @@ impl Bdpt {
 }
 
 impl Estimator for Bdpt {
-    fn sample(&self, scene: &Scene, pixel: usize, stream: &mut IndependentStream, splats: &mut Vec<Splat>) -> Rgb {
+    fn sample(
+        &self,
+        scene: &Scene,
+        pixel: usize,
+        stream: &mut IndependentStream,
+        splats: &mut Vec<Splat>,
+    ) -> Rgb {
         SUBPATHS.with(|b| {
             let (cam, light) = &mut *b.borrow_mut();
-            camera_subpath(scene, stream, self.walk.max_camera_vertices(), Some(pixel), cam);
+            camera_subpath(
+                scene,
+                stream,
+                self.walk.max_camera_vertices(),
+                Some(pixel),
+                cam,
+            );
             light_subpath(scene, stream, self.walk.max_light_vertices(), light);
             self.evaluate(scene, light, cam, splats)
         })

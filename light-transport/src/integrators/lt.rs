@@ -21,7 +21,13 @@ pub struct LightTracer {
 }
 
 impl Estimator for LightTracer {
-    fn sample(&self, scene: &Scene, _pixel: usize, stream: &mut IndependentStream, splats: &mut Vec<Splat>) -> Rgb {
+    fn sample(
+        &self,
+        scene: &Scene,
+        _pixel: usize,
+        stream: &mut IndependentStream,
+        splats: &mut Vec<Splat>,
+    ) -> Rgb {
         SUBPATHS.with(|b| {
             let (cam, light) = &mut *b.borrow_mut();
             // The lens point only: film numbers are not used by (s, 1) strategies.

@@ -28,7 +28,13 @@ pub type Splat = ([f64; 2], Rgb);
 pub trait Estimator: Sync {
     /// Estimate for the sample of `pixel` (its own pixel's value), splatting light-side
     /// contributions into `splats`.
-    fn sample(&self, scene: &Scene, pixel: usize, stream: &mut IndependentStream, splats: &mut Vec<Splat>) -> Rgb;
+    fn sample(
+        &self,
+        scene: &Scene,
+        pixel: usize,
+        stream: &mut IndependentStream,
+        splats: &mut Vec<Splat>,
+    ) -> Rgb;
     /// Whether `sample`'s return value is a pixel estimate (false for light tracing, which only
     /// splats).
     fn has_pixel_estimate(&self) -> bool {
@@ -80,7 +86,13 @@ const PASS_PURPOSE: u64 = 0x5eed_0001;
 
 /// Render `estimator` into a film within `budget`; `progress` is called after every pass and may
 /// stop the render early by returning `false`.
-pub fn render<E: Estimator>(scene: &Scene, estimator: &E, budget: Budget, seed: u64, mut progress: impl FnMut(&Film, Progress) -> bool) -> (Film, RenderStats) {
+pub fn render<E: Estimator>(
+    scene: &Scene,
+    estimator: &E,
+    budget: Budget,
+    seed: u64,
+    mut progress: impl FnMut(&Film, Progress) -> bool,
+) -> (Film, RenderStats) {
     let (w, h) = (scene.camera.width, scene.camera.height);
     let npix = w * h;
     let mut film = Film::new(w, h);
@@ -102,7 +114,11 @@ pub fn render<E: Estimator>(scene: &Scene, estimator: &E, budget: Budget, seed: 
                 let mut samples = Vec::with_capacity(hi - lo);
                 let mut splats = Vec::new();
                 for pixel in lo..hi {
-                    let mut stream = IndependentStream::new(mcmc_core::rng::substream(seed ^ pass.wrapping_mul(0x9E37_79B9_7F4A_7C15), PASS_PURPOSE, pixel as u64));
+                    let mut stream = IndependentStream::new(mcmc_core::rng::substream(
+                        seed ^ pass.wrapping_mul(0x9E37_79B9_7F4A_7C15),
+                        PASS_PURPOSE,
+                        pixel as u64,
+                    ));
                     let v = estimator.sample(scene, pixel, &mut stream, &mut splats);
                     samples.push((pixel, v));
                 }
@@ -126,7 +142,15 @@ pub fn render<E: Estimator>(scene: &Scene, estimator: &E, budget: Budget, seed: 
         stats.passes += 1;
         stats.samples += npix as u64;
         let elapsed = start.elapsed();
-        let go_on = progress(&film, Progress { passes: stats.passes, planned, elapsed, rays: stats.rays });
+        let go_on = progress(
+            &film,
+            Progress {
+                passes: stats.passes,
+                planned,
+                elapsed,
+                rays: stats.rays,
+            },
+        );
         let done = match budget {
             Budget::SamplesPerPixel(n) => stats.passes >= n.max(1),
             Budget::Time(t) => elapsed >= t,
@@ -145,5 +169,8 @@ pub fn render<E: Estimator>(scene: &Scene, estimator: &E, budget: Budget, seed: 
 pub fn film_position(scene: &Scene, pixel: usize, jitter: [f64; 2]) -> [f64; 2] {
     let (w, h) = (scene.camera.width, scene.camera.height);
     let (x, y) = (pixel % w, pixel / w);
-    [crate::math::clamp_unit((x as f64 + jitter[0]) / w as f64), crate::math::clamp_unit((y as f64 + jitter[1]) / h as f64)]
+    [
+        crate::math::clamp_unit((x as f64 + jitter[0]) / w as f64),
+        crate::math::clamp_unit((y as f64 + jitter[1]) / h as f64),
+    ]
 }

@@ -7,7 +7,9 @@ use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, offset_origin};
 use crate::light::LightKind;
 use crate::path::MisHeuristic;
-use crate::sampler::{CAMERA_BLOCK, CAMERA_STREAM, IndependentStream, SampleStream, TECHNIQUE_STREAM, VERTEX_BLOCK};
+use crate::sampler::{
+    CAMERA_BLOCK, CAMERA_STREAM, IndependentStream, SampleStream, TECHNIQUE_STREAM, VERTEX_BLOCK,
+};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
@@ -30,7 +32,13 @@ fn mis(a: f64, b: f64, h: MisHeuristic) -> f64 {
 }
 
 impl Estimator for PathTracer {
-    fn sample(&self, scene: &Scene, pixel: usize, stream: &mut IndependentStream, _splats: &mut Vec<Splat>) -> Rgb {
+    fn sample(
+        &self,
+        scene: &Scene,
+        pixel: usize,
+        stream: &mut IndependentStream,
+        _splats: &mut Vec<Splat>,
+    ) -> Rgb {
         stream.start_stream(CAMERA_STREAM);
         let film = super::film_position(scene, pixel, stream.next_2d());
         let lens = stream.next_2d();
@@ -45,7 +53,9 @@ impl Estimator for PathTracer {
         let mut specular = true;
         let prims = &scene.bvh.primitives;
         for bounces in 0..self.max_edges {
-            let Some(hit) = scene.intersect(&ray) else { break };
+            let Some(hit) = scene.intersect(&ray) else {
+                break;
+            };
             let p = hit.point;
             let wo = -ray.d;
             // Emission reached by the path: `bounces + 1` edges.
@@ -55,7 +65,9 @@ impl Estimator for PathTracer {
                     let w = if specular {
                         1.0
                     } else {
-                        let pdf_light = scene.light_distribution.pdf(li) * light.pdf_position() * hit.t * hit.t / p.n.dot(wo).abs();
+                        let pdf_light =
+                            scene.light_distribution.pdf(li) * light.pdf_position() * hit.t * hit.t
+                                / p.n.dot(wo).abs();
                         mis(last_pdf, pdf_light, self.heuristic)
                     };
                     l += beta * le * w;
@@ -79,17 +91,31 @@ impl Estimator for PathTracer {
                     if dist2 > 0.0 {
                         let wi = d / dist2.sqrt();
                         let (le, pdf_solid, delta) = match light {
-                            LightKind::Point { intensity, .. } => (*intensity, p_choice * dist2, true),
+                            LightKind::Point { intensity, .. } => {
+                                (*intensity, p_choice * dist2, true)
+                            }
                             _ => {
                                 let cos_l = lp.n.dot(-wi).abs();
-                                (light.radiance(lp.n, -wi), p_choice * pdf_area * dist2 / cos_l, false)
+                                (
+                                    light.radiance(lp.n, -wi),
+                                    p_choice * pdf_area * dist2 / cos_l,
+                                    false,
+                                )
                             }
                         };
                         let f = bsdf.eval(wo, wi, TransportMode::Radiance);
-                        if !le.is_black() && !f.is_black() && pdf_solid.is_finite() && pdf_solid > 0.0 {
+                        if !le.is_black()
+                            && !f.is_black()
+                            && pdf_solid.is_finite()
+                            && pdf_solid > 0.0
+                        {
                             let light_normal = if delta { None } else { Some(lp.n) };
                             if scene.visible(p.p, Some(p.n), lp.p, light_normal) {
-                                let w = if delta { 1.0 } else { mis(pdf_solid, bsdf.pdf(wo, wi), self.heuristic) };
+                                let w = if delta {
+                                    1.0
+                                } else {
+                                    mis(pdf_solid, bsdf.pdf(wo, wi), self.heuristic)
+                                };
                                 l += beta * f * le * (wi.dot(p.n).abs() * w / pdf_solid);
                             }
                         }
@@ -102,7 +128,9 @@ impl Estimator for PathTracer {
             let u_lobe = stream.next_1d();
             let u = stream.next_2d();
             let rr = stream.next_1d();
-            let Some(bs) = bsdf.sample(wo, u_lobe, u, TransportMode::Radiance) else { break };
+            let Some(bs) = bsdf.sample(wo, u_lobe, u, TransportMode::Radiance) else {
+                break;
+            };
             if bs.pdf == 0.0 || bs.f.is_black() {
                 break;
             }

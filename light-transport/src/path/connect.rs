@@ -39,7 +39,13 @@ pub fn geometry(scene: &Scene, a: &Vertex, b: &Vertex) -> f64 {
 
 /// Evaluate strategy `(s, t)`; `None` when it contributes nothing (occluded, not connectible,
 /// outside the image).
-pub fn connect(scene: &Scene, light: &[Vertex], camera: &[Vertex], s: usize, t: usize) -> Option<Connection> {
+pub fn connect(
+    scene: &Scene,
+    light: &[Vertex],
+    camera: &[Vertex],
+    s: usize,
+    t: usize,
+) -> Option<Connection> {
     if t == 0 || t > camera.len() || s > light.len() {
         return None;
     }
@@ -53,7 +59,10 @@ pub fn connect(scene: &Scene, light: &[Vertex], camera: &[Vertex], s: usize, t: 
         if le.is_black() {
             return None;
         }
-        return Some(Connection { value: le * pt.beta, raster: None });
+        return Some(Connection {
+            value: le * pt.beta,
+            raster: None,
+        });
     }
     let qs = &light[s - 1];
     if !qs.connectible() || !pt.connectible() {
@@ -63,20 +72,34 @@ pub fn connect(scene: &Scene, light: &[Vertex], camera: &[Vertex], s: usize, t: 
         let w = (qs.p() - pt.p()).normalize_or_zero();
         let (we, _, raster) = scene.camera.importance(pt.p(), w);
         let raster = raster?;
-        let fq = if s == 1 { qs.le(scene, pt) } else { qs.f(pt, TransportMode::Importance) };
+        let fq = if s == 1 {
+            qs.le(scene, pt)
+        } else {
+            qs.f(pt, TransportMode::Importance)
+        };
         let value = qs.beta * fq * (we * geometry(scene, qs, pt) / pt.pdf_fwd);
         if value.is_black() || !scene.visible(qs.p(), surface_normal(scene, qs), pt.p(), None) {
             return None;
         }
-        return Some(Connection { value, raster: Some(raster) });
+        return Some(Connection {
+            value,
+            raster: Some(raster),
+        });
     }
-    let fq = if s == 1 { qs.le(scene, pt) } else { qs.f(pt, TransportMode::Importance) };
+    let fq = if s == 1 {
+        qs.le(scene, pt)
+    } else {
+        qs.f(pt, TransportMode::Importance)
+    };
     let fp = pt.f(qs, TransportMode::Radiance);
     let value = qs.beta * fq * fp * pt.beta * geometry(scene, qs, pt);
     if value.is_black() || !scene.visible(qs.p(), surface_normal(scene, qs), pt.p(), Some(pt.n())) {
         return None;
     }
-    Some(Connection { value, raster: None })
+    Some(Connection {
+        value,
+        raster: None,
+    })
 }
 
 fn surface_normal(scene: &Scene, v: &Vertex) -> Option<crate::math::DVec3> {

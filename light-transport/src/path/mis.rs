@@ -34,7 +34,14 @@ fn remap(p: f64) -> f64 {
 /// The MIS weight of strategy `(s, t)` for the path formed by `light[..s]` and `camera[..t]`.
 /// Strategies `(0, 2)` and `(1, 1)` alone make paths of one edge; BDPT evaluates only `(0, 2)`
 /// there, which then has weight 1 (pbrt's convention).
-pub fn mis_weight(scene: &Scene, light: &[Vertex], camera: &[Vertex], s: usize, t: usize, heuristic: MisHeuristic) -> f64 {
+pub fn mis_weight(
+    scene: &Scene,
+    light: &[Vertex],
+    camera: &[Vertex],
+    s: usize,
+    t: usize,
+    heuristic: MisHeuristic,
+) -> f64 {
     if s + t == 2 {
         return 1.0;
     }
@@ -46,10 +53,18 @@ pub fn mis_weight(scene: &Scene, light: &[Vertex], camera: &[Vertex], s: usize, 
     let mut cam: smallvec_like::Buf = smallvec_like::Buf::new();
     let mut lit: smallvec_like::Buf = smallvec_like::Buf::new();
     for v in &camera[..t] {
-        cam.push(Densities { fwd: v.pdf_fwd, rev: v.pdf_rev, delta: v.delta });
+        cam.push(Densities {
+            fwd: v.pdf_fwd,
+            rev: v.pdf_rev,
+            delta: v.delta,
+        });
     }
     for v in &light[..s] {
-        lit.push(Densities { fwd: v.pdf_fwd, rev: v.pdf_rev, delta: v.delta });
+        lit.push(Densities {
+            fwd: v.pdf_fwd,
+            rev: v.pdf_rev,
+            delta: v.delta,
+        });
     }
     let pt = &camera[t - 1];
     let pt_minus = if t > 1 { Some(&camera[t - 2]) } else { None };
@@ -84,12 +99,18 @@ pub fn mis_weight(scene: &Scene, light: &[Vertex], camera: &[Vertex], s: usize, 
     }
     ri = 1.0;
     let light_is_delta = match light.first().map(|v| v.kind) {
-        Some(super::VertexKind::Light { light: l }) => matches!(scene.lights[l as usize], LightKind::Point { .. }),
+        Some(super::VertexKind::Light { light: l }) => {
+            matches!(scene.lights[l as usize], LightKind::Point { .. })
+        }
         _ => false,
     };
     for i in (0..s).rev() {
         ri *= remap(lit[i].rev) / remap(lit[i].fwd);
-        let delta_before = if i > 0 { lit[i - 1].delta } else { light_is_delta };
+        let delta_before = if i > 0 {
+            lit[i - 1].delta
+        } else {
+            light_is_delta
+        };
         if !lit[i].delta && !delta_before {
             sum += pow(ri);
         }
@@ -110,7 +131,15 @@ mod smallvec_like {
 
     impl Buf {
         pub fn new() -> Self {
-            Self { inline: [Densities { fwd: 0.0, rev: 0.0, delta: false }; 32], len: 0, heap: Vec::new() }
+            Self {
+                inline: [Densities {
+                    fwd: 0.0,
+                    rev: 0.0,
+                    delta: false,
+                }; 32],
+                len: 0,
+                heap: Vec::new(),
+            }
         }
         pub fn push(&mut self, d: Densities) {
             if self.len < 32 {
@@ -128,13 +157,21 @@ mod smallvec_like {
     impl std::ops::Index<usize> for Buf {
         type Output = Densities;
         fn index(&self, i: usize) -> &Densities {
-            if self.len <= 32 { &self.inline[i] } else { &self.heap[i] }
+            if self.len <= 32 {
+                &self.inline[i]
+            } else {
+                &self.heap[i]
+            }
         }
     }
 
     impl std::ops::IndexMut<usize> for Buf {
         fn index_mut(&mut self, i: usize) -> &mut Densities {
-            if self.len <= 32 { &mut self.inline[i] } else { &mut self.heap[i] }
+            if self.len <= 32 {
+                &mut self.inline[i]
+            } else {
+                &mut self.heap[i]
+            }
         }
     }
 }

@@ -64,7 +64,9 @@ impl Vertex {
     pub fn on_surface(&self, scene: &Scene) -> bool {
         match self.kind {
             VertexKind::Surface => true,
-            VertexKind::Light { light } => matches!(scene.lights[light as usize], LightKind::Area { .. }),
+            VertexKind::Light { light } => {
+                matches!(scene.lights[light as usize], LightKind::Area { .. })
+            }
             VertexKind::Camera => false,
         }
     }
@@ -103,7 +105,9 @@ impl Vertex {
 
     /// BSDF value at this vertex for light arriving from `next` (or the adjoint).
     pub fn f(&self, next: &Vertex, mode: TransportMode) -> Rgb {
-        let Some(b) = &self.bsdf else { return Rgb::BLACK };
+        let Some(b) = &self.bsdf else {
+            return Rgb::BLACK;
+        };
         let wi = (next.p() - self.p()).normalize_or_zero();
         b.eval(self.wo, wi, mode)
     }
@@ -130,7 +134,9 @@ impl Vertex {
     /// For a vertex on an emitter: area density at `next` of a light subpath leaving this point
     /// toward `next` (the emission direction density).
     pub fn pdf_light(&self, scene: &Scene, next: &Vertex) -> f64 {
-        let Some((_, light)) = self.emitter(scene) else { return 0.0 };
+        let Some((_, light)) = self.emitter(scene) else {
+            return 0.0;
+        };
         let w = (next.p() - self.p()).normalize_or_zero();
         self.to_area(light.pdf_direction(self.n(), w), next, scene)
     }
@@ -138,13 +144,17 @@ impl Vertex {
     /// For a vertex on an emitter: density of a light subpath starting here (light choice × area
     /// density of the position).
     pub fn pdf_light_origin(&self, scene: &Scene) -> f64 {
-        let Some((i, light)) = self.emitter(scene) else { return 0.0 };
+        let Some((i, light)) = self.emitter(scene) else {
+            return 0.0;
+        };
         scene.light_distribution.pdf(i) * light.pdf_position()
     }
 
     /// Radiance emitted from this vertex toward `toward` (zero if it is not on an emitter).
     pub fn le(&self, scene: &Scene, toward: &Vertex) -> Rgb {
-        let Some((_, light)) = self.emitter(scene) else { return Rgb::BLACK };
+        let Some((_, light)) = self.emitter(scene) else {
+            return Rgb::BLACK;
+        };
         let w = (toward.p() - self.p()).normalize_or_zero();
         match light {
             LightKind::Point { intensity, .. } => *intensity,

@@ -7,7 +7,9 @@
 use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, SurfacePoint, offset_origin};
-use crate::sampler::{CAMERA_BLOCK, CAMERA_STREAM, LIGHT_BLOCK, LIGHT_STREAM, SampleStream, VERTEX_BLOCK};
+use crate::sampler::{
+    CAMERA_BLOCK, CAMERA_STREAM, LIGHT_BLOCK, LIGHT_STREAM, SampleStream, VERTEX_BLOCK,
+};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
@@ -37,7 +39,13 @@ pub fn block_start(endpoint_block: usize, b: usize) -> usize {
 
 /// Trace a camera subpath of at most `max_vertices` vertices into `path` (cleared first). With
 /// `pixel`, the film numbers place the sample inside that pixel; without, over the whole film.
-pub fn camera_subpath<S: SampleStream>(scene: &Scene, stream: &mut S, max_vertices: usize, pixel: Option<usize>, path: &mut Vec<Vertex>) {
+pub fn camera_subpath<S: SampleStream>(
+    scene: &Scene,
+    stream: &mut S,
+    max_vertices: usize,
+    pixel: Option<usize>,
+    path: &mut Vec<Vertex>,
+) {
     path.clear();
     if max_vertices == 0 {
         return;
@@ -52,7 +60,13 @@ pub fn camera_subpath<S: SampleStream>(scene: &Scene, stream: &mut S, max_vertic
     let cs = scene.camera.sample_ray(film, lens);
     path.push(Vertex {
         kind: VertexKind::Camera,
-        point: SurfacePoint { p: cs.ray.o, n: scene.camera.forward(), uv: [0.0; 2], dpdu: crate::math::DVec3::X, primitive: u32::MAX },
+        point: SurfacePoint {
+            p: cs.ray.o,
+            n: scene.camera.forward(),
+            uv: [0.0; 2],
+            dpdu: crate::math::DVec3::X,
+            primitive: u32::MAX,
+        },
         wo: crate::math::DVec3::ZERO,
         bsdf: None,
         beta: Rgb::WHITE,
@@ -64,11 +78,26 @@ pub fn camera_subpath<S: SampleStream>(scene: &Scene, stream: &mut S, max_vertic
         return;
     }
     // W_e cos θ / (p_pos p_dir) = 1 by the camera's normalisation.
-    random_walk(scene, cs.ray, Rgb::WHITE, cs.pdf_dir, max_vertices, TransportMode::Radiance, stream, CAMERA_BLOCK, path);
+    random_walk(
+        scene,
+        cs.ray,
+        Rgb::WHITE,
+        cs.pdf_dir,
+        max_vertices,
+        TransportMode::Radiance,
+        stream,
+        CAMERA_BLOCK,
+        path,
+    );
 }
 
 /// Trace a light subpath of at most `max_vertices` vertices into `path` (cleared first).
-pub fn light_subpath<S: SampleStream>(scene: &Scene, stream: &mut S, max_vertices: usize, path: &mut Vec<Vertex>) {
+pub fn light_subpath<S: SampleStream>(
+    scene: &Scene,
+    stream: &mut S,
+    max_vertices: usize,
+    path: &mut Vec<Vertex>,
+) {
     path.clear();
     if max_vertices == 0 {
         return;
@@ -78,9 +107,13 @@ pub fn light_subpath<S: SampleStream>(scene: &Scene, stream: &mut S, max_vertice
     let choice = stream.next_1d();
     let u_pos = stream.next_2d();
     let u_dir = stream.next_2d();
-    let Some((li, p_choice)) = scene.light_distribution.sample(choice) else { return };
+    let Some((li, p_choice)) = scene.light_distribution.sample(choice) else {
+        return;
+    };
     let light = &scene.lights[li];
-    let Some(es) = light.sample_emission(&scene.bvh.primitives, u_pos, u_dir) else { return };
+    let Some(es) = light.sample_emission(&scene.bvh.primitives, u_pos, u_dir) else {
+        return;
+    };
     let pdf_origin = p_choice * es.pdf_pos;
     path.push(Vertex {
         kind: VertexKind::Light { light: li as u32 },
@@ -95,10 +128,28 @@ pub fn light_subpath<S: SampleStream>(scene: &Scene, stream: &mut S, max_vertice
     if es.pdf_dir == 0.0 || es.le.is_black() {
         return;
     }
-    let cos = if es.delta_pos { 1.0 } else { es.point.n.dot(es.w).abs() };
+    let cos = if es.delta_pos {
+        1.0
+    } else {
+        es.point.n.dot(es.w).abs()
+    };
     let beta = es.le * (cos / (pdf_origin * es.pdf_dir));
-    let o = if es.delta_pos { es.point.p } else { offset_origin(es.point.p, es.point.n, es.w) };
-    random_walk(scene, Ray::new(o, es.w), beta, es.pdf_dir, max_vertices, TransportMode::Importance, stream, LIGHT_BLOCK, path);
+    let o = if es.delta_pos {
+        es.point.p
+    } else {
+        offset_origin(es.point.p, es.point.n, es.w)
+    };
+    random_walk(
+        scene,
+        Ray::new(o, es.w),
+        beta,
+        es.pdf_dir,
+        max_vertices,
+        TransportMode::Importance,
+        stream,
+        LIGHT_BLOCK,
+        path,
+    );
 }
 
 /// Continue a subpath whose last vertex emitted `ray` with throughput `beta` and solid-angle
@@ -116,7 +167,9 @@ fn random_walk<S: SampleStream>(
     path: &mut Vec<Vertex>,
 ) {
     while path.len() < max_vertices {
-        let Some(hit) = scene.intersect(&ray) else { break };
+        let Some(hit) = scene.intersect(&ray) else {
+            break;
+        };
         let bsdf = scene.bsdf(&hit.point).ok();
         let mut v = Vertex {
             kind: VertexKind::Surface,
@@ -136,11 +189,15 @@ fn random_walk<S: SampleStream>(
             break;
         }
         let vert = &path[b];
-        let Some(bsdf) = vert.bsdf.as_ref() else { break };
+        let Some(bsdf) = vert.bsdf.as_ref() else {
+            break;
+        };
         stream.seek(block_start(endpoint_block, b));
         let u_lobe = stream.next_1d();
         let u = stream.next_2d();
-        let Some(bs) = bsdf.sample(vert.wo, u_lobe, u, mode) else { break };
+        let Some(bs) = bsdf.sample(vert.wo, u_lobe, u, mode) else {
+            break;
+        };
         if bs.pdf == 0.0 || bs.f.is_black() {
             break;
         }
@@ -151,7 +208,11 @@ fn random_walk<S: SampleStream>(
         }
         // Delta directions have no density: both densities are 0 (remapped to 1 in the MIS ratios,
         // and this vertex is marked so no strategy connects through it).
-        let (pdf_fwd, pdf_rev) = if bs.delta { (0.0, 0.0) } else { (bs.pdf, bsdf.pdf(bs.wi, vert.wo)) };
+        let (pdf_fwd, pdf_rev) = if bs.delta {
+            (0.0, 0.0)
+        } else {
+            (bs.pdf, bsdf.pdf(bs.wi, vert.wo))
+        };
         pdf_dir = pdf_fwd;
         let rev = vert.to_area(pdf_rev, &path[prev], scene);
         ray = Ray::new(offset_origin(vert.p(), n, bs.wi), bs.wi);

@@ -40,7 +40,10 @@ pub struct Scene {
 impl Scene {
     /// Build from a description; the image size is the description's unless overridden.
     pub fn new(desc: &SceneDescription, resolution: Option<(usize, usize)>) -> Result<Self> {
-        let cam = desc.camera.as_ref().ok_or_else(|| Error::InvalidScene("no camera".into()))?;
+        let cam = desc
+            .camera
+            .as_ref()
+            .ok_or_else(|| Error::InvalidScene("no camera".into()))?;
         let (w, h) = resolution.unwrap_or((desc.film.width, desc.film.height));
         validate_resolution(w, h)?;
         let camera = Camera::new(cam, w, h)?;
@@ -52,7 +55,9 @@ impl Scene {
             if m < n {
                 Ok(m as u32)
             } else {
-                Err(Error::InvalidScene(format!("{what} refers to material {m}, but only {n} exist")))
+                Err(Error::InvalidScene(format!(
+                    "{what} refers to material {m}, but only {n} exist"
+                )))
             }
         };
         for mesh in &desc.meshes {
@@ -60,13 +65,25 @@ impl Scene {
             let mut area = 0.0;
             let first = prims.len();
             for tri in &mesh.indices {
-                let get = |i: u32| mesh.positions.get(i as usize).copied().ok_or_else(|| Error::InvalidScene(format!("triangle index {i} out of range ({} vertices)", mesh.positions.len())));
+                let get = |i: u32| {
+                    mesh.positions.get(i as usize).copied().ok_or_else(|| {
+                        Error::InvalidScene(format!(
+                            "triangle index {i} out of range ({} vertices)",
+                            mesh.positions.len()
+                        ))
+                    })
+                };
                 let p = [get(tri[0])?, get(tri[1])?, get(tri[2])?];
                 let uv = match &mesh.uvs {
-                    Some(uvs) => [tri[0], tri[1], tri[2]].map(|i| uvs.get(i as usize).copied().unwrap_or([0.0, 0.0])),
+                    Some(uvs) => [tri[0], tri[1], tri[2]]
+                        .map(|i| uvs.get(i as usize).copied().unwrap_or([0.0, 0.0])),
                     None => [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
                 };
-                let t = Triangle { p, uv, flip: mesh.flip_normals };
+                let t = Triangle {
+                    p,
+                    uv,
+                    flip: mesh.flip_normals,
+                };
                 let a = t.area();
                 if !(a > 0.0 && a.is_finite()) {
                     continue; // loaders drop and report degenerate triangles; never trace them
@@ -77,7 +94,10 @@ impl Scene {
             }
             if let Some(al) = mesh.area_light {
                 if !(area > 0.0) {
-                    return Err(Error::InvalidScene(format!("an area light mesh{} has zero area", at(&mesh.location))));
+                    return Err(Error::InvalidScene(format!(
+                        "an area light mesh{} has zero area",
+                        at(&mesh.location)
+                    )));
                 }
                 for i in first..prims.len() {
                     emissive.push((i as u32, al));
@@ -89,7 +109,17 @@ impl Scene {
         // whichever point of the sphere it reaches); the sphere absorbs.
         let mut spheres = desc.spheres.clone();
         let mut materials = desc.materials.clone();
-        let infinite: Vec<Rgb> = desc.lights.iter().filter_map(|l| if let LightDesc::Infinite { radiance } = l { Some(*radiance) } else { None }).collect();
+        let infinite: Vec<Rgb> = desc
+            .lights
+            .iter()
+            .filter_map(|l| {
+                if let LightDesc::Infinite { radiance } = l {
+                    Some(*radiance)
+                } else {
+                    None
+                }
+            })
+            .collect();
         if infinite.len() > 1 {
             return Err(Error::InvalidScene("more than one infinite light".into()));
         }
@@ -97,12 +127,17 @@ impl Scene {
             let (lo, hi) = scene_extent(desc, camera.position());
             let center = (lo + hi) / 2.0;
             let radius = ((hi - lo).length() / 2.0).max(1e-3) * 2.0;
-            materials.push(MaterialDesc::Matte { kd: RgbTexture::Constant(Rgb::BLACK) });
+            materials.push(MaterialDesc::Matte {
+                kd: RgbTexture::Constant(Rgb::BLACK),
+            });
             spheres.push(SphereDesc {
                 center,
                 radius,
                 material: materials.len() - 1,
-                area_light: Some(AreaLightDesc { radiance, two_sided: false }),
+                area_light: Some(AreaLightDesc {
+                    radiance,
+                    two_sided: false,
+                }),
                 flip_normals: true,
                 location: None,
             });
@@ -110,23 +145,39 @@ impl Scene {
         let _ = nmat_check(&materials)?;
         for s in &spheres {
             if !(s.radius > 0.0 && s.radius.is_finite() && s.center.is_finite()) {
-                return Err(Error::InvalidScene(format!("sphere{} has radius {} at {}", at(&s.location), s.radius, s.center)));
+                return Err(Error::InvalidScene(format!(
+                    "sphere{} has radius {} at {}",
+                    at(&s.location),
+                    s.radius,
+                    s.center
+                )));
             }
             let m = material_index(s.material, "a sphere")?;
             let i = prims.len() as u32;
-            prims.push(Primitive::Sphere(Sphere { center: s.center, radius: s.radius, flip: s.flip_normals }));
+            prims.push(Primitive::Sphere(Sphere {
+                center: s.center,
+                radius: s.radius,
+                flip: s.flip_normals,
+            }));
             prim_mat.push(m);
             if let Some(al) = s.area_light {
                 emissive.push((i, al));
             }
         }
         let bvh = Bvh::new(prims);
-        let bounds = if bvh.primitives.is_empty() { (DVec3::ZERO, DVec3::ZERO) } else { bvh.bounds() };
+        let bounds = if bvh.primitives.is_empty() {
+            (DVec3::ZERO, DVec3::ZERO)
+        } else {
+            bvh.bounds()
+        };
         let mut lights = Vec::new();
         let mut prim_light = vec![NONE; bvh.primitives.len()];
         for (i, al) in emissive {
             if !al.radiance.is_finite() || al.radiance.0.iter().any(|&v| v < 0.0) {
-                return Err(Error::InvalidScene(format!("area light radiance {:?} is negative or not finite", al.radiance.0)));
+                return Err(Error::InvalidScene(format!(
+                    "area light radiance {:?} is negative or not finite",
+                    al.radiance.0
+                )));
             }
             if al.radiance.is_black() {
                 continue;
@@ -136,21 +187,42 @@ impl Scene {
                 Primitive::Sphere(s) => s.area(),
             };
             prim_light[i as usize] = lights.len() as u32;
-            lights.push(LightKind::Area { primitive: i, radiance: al.radiance, two_sided: al.two_sided, area });
+            lights.push(LightKind::Area {
+                primitive: i,
+                radiance: al.radiance,
+                two_sided: al.two_sided,
+                area,
+            });
         }
         for l in &desc.lights {
-            if let LightDesc::Point { position, intensity } = *l {
-                if !position.is_finite() || !intensity.is_finite() || intensity.0.iter().any(|&v| v < 0.0) {
+            if let LightDesc::Point {
+                position,
+                intensity,
+            } = *l
+            {
+                if !position.is_finite()
+                    || !intensity.is_finite()
+                    || intensity.0.iter().any(|&v| v < 0.0)
+                {
                     return Err(Error::InvalidScene("a point light has a non-finite position or a negative or non-finite intensity".into()));
                 }
-                lights.push(LightKind::Point { position, intensity });
+                lights.push(LightKind::Point {
+                    position,
+                    intensity,
+                });
             }
         }
         let powers: Vec<f64> = lights.iter().map(|l| l.power()).collect();
         if !(powers.iter().sum::<f64>() > 0.0) {
-            return Err(Error::InvalidScene("the scene has no light with positive power: the image would be black".into()));
+            return Err(Error::InvalidScene(
+                "the scene has no light with positive power: the image would be black".into(),
+            ));
         }
-        let mut notes: Vec<String> = desc.ignored.iter().map(|(d, l)| format!("{l}: ignored {d}")).collect();
+        let mut notes: Vec<String> = desc
+            .ignored
+            .iter()
+            .map(|(d, l)| format!("{l}: ignored {d}"))
+            .collect();
         notes.extend(desc.warnings.iter().map(|(w, l)| format!("{l}: {w}")));
         Ok(Self {
             bvh,
@@ -206,7 +278,12 @@ impl Scene {
 
     /// Number of triangles and spheres.
     pub fn primitive_counts(&self) -> (usize, usize) {
-        let t = self.bvh.primitives.iter().filter(|p| matches!(p, Primitive::Triangle(_))).count();
+        let t = self
+            .bvh
+            .primitives
+            .iter()
+            .filter(|p| matches!(p, Primitive::Triangle(_)))
+            .count();
         (t, self.bvh.primitives.len() - t)
     }
 }
@@ -216,7 +293,9 @@ fn nmat_check(materials: &[MaterialDesc]) -> Result<usize> {
         if let MaterialDesc::Mix { a, b, .. } = m
             && (*a >= materials.len() || *b >= materials.len())
         {
-            return Err(Error::InvalidScene(format!("mix material {i} refers to a missing material")));
+            return Err(Error::InvalidScene(format!(
+                "mix material {i} refers to a missing material"
+            )));
         }
     }
     Ok(materials.len())

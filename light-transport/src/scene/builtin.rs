@@ -41,9 +41,17 @@ impl Builder {
         let d = SceneDescription {
             camera: Some(CameraDesc {
                 camera_to_world: look_at(eye, target, DVec3::Y),
-                projection: Projection::Perspective { fov: fov_degrees.to_radians(), lens_radius: 0.0, focal_distance: 1.0 },
+                projection: Projection::Perspective {
+                    fov: fov_degrees.to_radians(),
+                    lens_radius: 0.0,
+                    focal_distance: 1.0,
+                },
             }),
-            film: FilmDesc { width, height, filename: None },
+            film: FilmDesc {
+                width,
+                height,
+                filename: None,
+            },
             ..Default::default()
         };
         Self { d }
@@ -55,7 +63,9 @@ impl Builder {
     }
 
     fn matte(&mut self, r: f64, g: f64, b: f64) -> usize {
-        self.material(MaterialDesc::Matte { kd: RgbTexture::Constant(Rgb::new(r, g, b)) })
+        self.material(MaterialDesc::Matte {
+            kd: RgbTexture::Constant(Rgb::new(r, g, b)),
+        })
     }
 
     /// A quad `p, p + a, p + a + b, p + b` (normal along `a × b`).
@@ -66,7 +76,10 @@ impl Builder {
             uvs: Some(vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]),
             indices: vec![[0, 1, 2], [0, 2, 3]],
             material,
-            area_light: light.map(|radiance| AreaLightDesc { radiance, two_sided: false }),
+            area_light: light.map(|radiance| AreaLightDesc {
+                radiance,
+                two_sided: false,
+            }),
             flip_normals: false,
             location: None,
         });
@@ -85,61 +98,199 @@ impl Builder {
     }
 
     fn sphere(&mut self, center: DVec3, radius: f64, material: usize) {
-        self.d.spheres.push(SphereDesc { center, radius, material, area_light: None, flip_normals: false, location: None });
+        self.d.spheres.push(SphereDesc {
+            center,
+            radius,
+            material,
+            area_light: None,
+            flip_normals: false,
+            location: None,
+        });
     }
 }
 
 fn cornell() -> SceneDescription {
-    let mut s = Builder::new(256, 256, DVec3::new(0.0, 1.0, 6.8), DVec3::new(0.0, 1.0, 0.0), 19.5);
+    let mut s = Builder::new(
+        256,
+        256,
+        DVec3::new(0.0, 1.0, 6.8),
+        DVec3::new(0.0, 1.0, 0.0),
+        19.5,
+    );
     let white = s.matte(0.725, 0.71, 0.68);
     let red = s.matte(0.63, 0.065, 0.05);
     let green = s.matte(0.14, 0.45, 0.091);
     let black = s.matte(0.0, 0.0, 0.0);
-    let mirror = s.material(MaterialDesc::Mirror { kr: Rgb::splat(0.95) });
-    let glass = s.material(MaterialDesc::Glass { eta: 1.5, alpha_u: 0.0, alpha_v: 0.0, kr: Rgb::WHITE, kt: Rgb::WHITE });
+    let mirror = s.material(MaterialDesc::Mirror {
+        kr: Rgb::splat(0.95),
+    });
+    let glass = s.material(MaterialDesc::Glass {
+        eta: 1.5,
+        alpha_u: 0.0,
+        alpha_v: 0.0,
+        kr: Rgb::WHITE,
+        kt: Rgb::WHITE,
+    });
     // Inward-facing walls of the box [−1, 1] × [0, 2] × [−1, 1], open at z = +1.
-    s.quad(DVec3::new(-1.0, 0.0, -1.0), DVec3::Z * 2.0, DVec3::X * 2.0, white, None); // floor (+y)
-    s.quad(DVec3::new(-1.0, 2.0, -1.0), DVec3::X * 2.0, DVec3::Z * 2.0, white, None); // ceiling (−y)
-    s.quad(DVec3::new(-1.0, 0.0, -1.0), DVec3::X * 2.0, DVec3::Y * 2.0, white, None); // back (+z)
-    s.quad(DVec3::new(-1.0, 0.0, -1.0), DVec3::Y * 2.0, DVec3::Z * 2.0, red, None); // left (+x)
-    s.quad(DVec3::new(1.0, 0.0, -1.0), DVec3::Z * 2.0, DVec3::Y * 2.0, green, None); // right (−x)
-    s.quad(DVec3::new(-0.24, 1.98, -0.22), DVec3::X * 0.47, DVec3::Z * 0.38, black, Some(Rgb::new(17.0, 12.0, 4.0)));
+    s.quad(
+        DVec3::new(-1.0, 0.0, -1.0),
+        DVec3::Z * 2.0,
+        DVec3::X * 2.0,
+        white,
+        None,
+    ); // floor (+y)
+    s.quad(
+        DVec3::new(-1.0, 2.0, -1.0),
+        DVec3::X * 2.0,
+        DVec3::Z * 2.0,
+        white,
+        None,
+    ); // ceiling (−y)
+    s.quad(
+        DVec3::new(-1.0, 0.0, -1.0),
+        DVec3::X * 2.0,
+        DVec3::Y * 2.0,
+        white,
+        None,
+    ); // back (+z)
+    s.quad(
+        DVec3::new(-1.0, 0.0, -1.0),
+        DVec3::Y * 2.0,
+        DVec3::Z * 2.0,
+        red,
+        None,
+    ); // left (+x)
+    s.quad(
+        DVec3::new(1.0, 0.0, -1.0),
+        DVec3::Z * 2.0,
+        DVec3::Y * 2.0,
+        green,
+        None,
+    ); // right (−x)
+    s.quad(
+        DVec3::new(-0.24, 1.98, -0.22),
+        DVec3::X * 0.47,
+        DVec3::Z * 0.38,
+        black,
+        Some(Rgb::new(17.0, 12.0, 4.0)),
+    );
     s.sphere(DVec3::new(-0.42, 0.35, -0.35), 0.35, mirror);
     s.sphere(DVec3::new(0.45, 0.35, 0.3), 0.35, glass);
     s.d
 }
 
 fn caustic() -> SceneDescription {
-    let mut s = Builder::new(320, 240, DVec3::new(0.0, 2.2, 4.5), DVec3::new(0.0, 0.3, 0.0), 35.0);
+    let mut s = Builder::new(
+        320,
+        240,
+        DVec3::new(0.0, 2.2, 4.5),
+        DVec3::new(0.0, 0.3, 0.0),
+        35.0,
+    );
     let floor = s.matte(0.7, 0.7, 0.7);
     let wall = s.matte(0.5, 0.55, 0.6);
     let black = s.matte(0.0, 0.0, 0.0);
-    let glass = s.material(MaterialDesc::Glass { eta: 1.5, alpha_u: 0.0, alpha_v: 0.0, kr: Rgb::WHITE, kt: Rgb::WHITE });
-    s.quad(DVec3::new(-4.0, 0.0, -3.0), DVec3::Z * 7.0, DVec3::X * 8.0, floor, None);
-    s.quad(DVec3::new(-4.0, 0.0, -3.0), DVec3::X * 8.0, DVec3::Y * 5.0, wall, None);
+    let glass = s.material(MaterialDesc::Glass {
+        eta: 1.5,
+        alpha_u: 0.0,
+        alpha_v: 0.0,
+        kr: Rgb::WHITE,
+        kt: Rgb::WHITE,
+    });
+    s.quad(
+        DVec3::new(-4.0, 0.0, -3.0),
+        DVec3::Z * 7.0,
+        DVec3::X * 8.0,
+        floor,
+        None,
+    );
+    s.quad(
+        DVec3::new(-4.0, 0.0, -3.0),
+        DVec3::X * 8.0,
+        DVec3::Y * 5.0,
+        wall,
+        None,
+    );
     s.sphere(DVec3::new(0.0, 0.6, 0.0), 0.6, glass);
     // A small bright light up and to the side: the sphere focuses it onto the floor.
-    s.quad(DVec3::new(-1.5, 3.0, -1.2), DVec3::Z * 0.3, DVec3::X * 0.3, black, Some(Rgb::splat(400.0)));
+    s.quad(
+        DVec3::new(-1.5, 3.0, -1.2),
+        DVec3::Z * 0.3,
+        DVec3::X * 0.3,
+        black,
+        Some(Rgb::splat(400.0)),
+    );
     s.d
 }
 
 fn door() -> SceneDescription {
-    let mut s = Builder::new(320, 240, DVec3::new(-1.6, 1.3, 1.7), DVec3::new(0.5, 1.0, -2.0), 55.0);
+    let mut s = Builder::new(
+        320,
+        240,
+        DVec3::new(-1.6, 1.3, 1.7),
+        DVec3::new(0.5, 1.0, -2.0),
+        55.0,
+    );
     let wall = s.matte(0.6, 0.6, 0.6);
     let floor = s.matte(0.5, 0.45, 0.4);
     let door = s.matte(0.55, 0.5, 0.45);
     let black = s.matte(0.0, 0.0, 0.0);
-    let plastic = s.material(MaterialDesc::Layered { kd: RgbTexture::Constant(Rgb::new(0.35, 0.15, 0.1)), ks: Rgb::splat(0.8), alpha_u: 0.08, alpha_v: 0.08, eta: 1.5 });
-    let metal = s.material(MaterialDesc::Metal { eta: Rgb::new(0.2, 0.92, 1.1), k: Rgb::new(3.9, 2.45, 2.14), alpha_u: 0.15, alpha_v: 0.15 });
+    let plastic = s.material(MaterialDesc::Layered {
+        kd: RgbTexture::Constant(Rgb::new(0.35, 0.15, 0.1)),
+        ks: Rgb::splat(0.8),
+        alpha_u: 0.08,
+        alpha_v: 0.08,
+        eta: 1.5,
+    });
+    let metal = s.material(MaterialDesc::Metal {
+        eta: Rgb::new(0.2, 0.92, 1.1),
+        k: Rgb::new(3.9, 2.45, 2.14),
+        alpha_u: 0.15,
+        alpha_v: 0.15,
+    });
     // Room A (camera): x ∈ [−2, 2], y ∈ [0, 2.5], z ∈ [−2, 2], inward normals.
-    s.quad(DVec3::new(-2.0, 0.0, -2.0), DVec3::Z * 4.0, DVec3::X * 4.0, floor, None);
-    s.quad(DVec3::new(-2.0, 2.5, -2.0), DVec3::X * 4.0, DVec3::Z * 4.0, wall, None);
-    s.quad(DVec3::new(-2.0, 0.0, 2.0), DVec3::Y * 2.5, DVec3::X * 4.0, wall, None);
-    s.quad(DVec3::new(-2.0, 0.0, -2.0), DVec3::Y * 2.5, DVec3::Z * 4.0, wall, None);
-    s.quad(DVec3::new(2.0, 0.0, -2.0), DVec3::Z * 4.0, DVec3::Y * 2.5, wall, None);
+    s.quad(
+        DVec3::new(-2.0, 0.0, -2.0),
+        DVec3::Z * 4.0,
+        DVec3::X * 4.0,
+        floor,
+        None,
+    );
+    s.quad(
+        DVec3::new(-2.0, 2.5, -2.0),
+        DVec3::X * 4.0,
+        DVec3::Z * 4.0,
+        wall,
+        None,
+    );
+    s.quad(
+        DVec3::new(-2.0, 0.0, 2.0),
+        DVec3::Y * 2.5,
+        DVec3::X * 4.0,
+        wall,
+        None,
+    );
+    s.quad(
+        DVec3::new(-2.0, 0.0, -2.0),
+        DVec3::Y * 2.5,
+        DVec3::Z * 4.0,
+        wall,
+        None,
+    );
+    s.quad(
+        DVec3::new(2.0, 0.0, -2.0),
+        DVec3::Z * 4.0,
+        DVec3::Y * 2.5,
+        wall,
+        None,
+    );
     // Wall z = −2 with a doorway x ∈ [0.3, 1.1], y ∈ [0, 2]: three pieces facing +z, and their
     // backs facing −z (room B's side).
-    for (lo, hi) in [((-2.0, 0.0), (0.3, 2.5)), ((1.1, 0.0), (2.0, 2.5)), ((0.3, 2.0), (1.1, 2.5))] {
+    for (lo, hi) in [
+        ((-2.0, 0.0), (0.3, 2.5)),
+        ((1.1, 0.0), (2.0, 2.5)),
+        ((0.3, 2.0), (1.1, 2.5)),
+    ] {
         let p = DVec3::new(lo.0, lo.1, -2.0);
         let (a, b) = (DVec3::X * (hi.0 - lo.0), DVec3::Y * (hi.1 - lo.1));
         s.quad(p, a, b, wall, None);
@@ -157,15 +308,61 @@ fn door() -> SceneDescription {
     s.quad(hinge + a, h, thick, door, None);
     s.quad(hinge, thick, h, door, None);
     // Room B: x ∈ [−2, 2], z ∈ [−5, −2], lit by a bright ceiling panel.
-    s.quad(DVec3::new(-2.0, 0.0, -5.0), DVec3::Z * 3.0, DVec3::X * 4.0, floor, None);
-    s.quad(DVec3::new(-2.0, 2.5, -5.0), DVec3::X * 4.0, DVec3::Z * 3.0, wall, None);
-    s.quad(DVec3::new(-2.0, 0.0, -5.0), DVec3::X * 4.0, DVec3::Y * 2.5, wall, None);
-    s.quad(DVec3::new(-2.0, 0.0, -5.0), DVec3::Y * 2.5, DVec3::Z * 3.0, wall, None);
-    s.quad(DVec3::new(2.0, 0.0, -5.0), DVec3::Z * 3.0, DVec3::Y * 2.5, wall, None);
-    s.quad(DVec3::new(-1.5, 2.49, -4.5), DVec3::X * 1.2, DVec3::Z * 1.0, black, Some(Rgb::splat(30.0)));
+    s.quad(
+        DVec3::new(-2.0, 0.0, -5.0),
+        DVec3::Z * 3.0,
+        DVec3::X * 4.0,
+        floor,
+        None,
+    );
+    s.quad(
+        DVec3::new(-2.0, 2.5, -5.0),
+        DVec3::X * 4.0,
+        DVec3::Z * 3.0,
+        wall,
+        None,
+    );
+    s.quad(
+        DVec3::new(-2.0, 0.0, -5.0),
+        DVec3::X * 4.0,
+        DVec3::Y * 2.5,
+        wall,
+        None,
+    );
+    s.quad(
+        DVec3::new(-2.0, 0.0, -5.0),
+        DVec3::Y * 2.5,
+        DVec3::Z * 3.0,
+        wall,
+        None,
+    );
+    s.quad(
+        DVec3::new(2.0, 0.0, -5.0),
+        DVec3::Z * 3.0,
+        DVec3::Y * 2.5,
+        wall,
+        None,
+    );
+    s.quad(
+        DVec3::new(-1.5, 2.49, -4.5),
+        DVec3::X * 1.2,
+        DVec3::Z * 1.0,
+        black,
+        Some(Rgb::splat(30.0)),
+    );
     // Furniture in room A.
-    s.cuboid(DVec3::new(-1.0, 0.0, -0.8), DVec3::new(0.2, 0.7, 0.2), plastic);
-    s.quad(DVec3::new(1.99, 0.3, -1.2), DVec3::Z * 1.2, DVec3::Y * 1.4, metal, None);
+    s.cuboid(
+        DVec3::new(-1.0, 0.0, -0.8),
+        DVec3::new(0.2, 0.7, 0.2),
+        plastic,
+    );
+    s.quad(
+        DVec3::new(1.99, 0.3, -1.2),
+        DVec3::Z * 1.2,
+        DVec3::Y * 1.4,
+        metal,
+        None,
+    );
     s.d
 }
 
@@ -175,7 +372,11 @@ mod tests {
 
     #[test]
     fn look_at_axes() {
-        let m = look_at(DVec3::new(0.0, 1.0, 5.0), DVec3::new(0.0, 1.0, 0.0), DVec3::Y);
+        let m = look_at(
+            DVec3::new(0.0, 1.0, 5.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::Y,
+        );
         assert!((m.transform_vector3(DVec3::Z) - DVec3::new(0.0, 0.0, -1.0)).length() < 1e-12);
         assert!((m.transform_vector3(DVec3::X) - DVec3::X).length() < 1e-12);
         assert!((m.transform_vector3(DVec3::Y) - DVec3::Y).length() < 1e-12);

@@ -48,8 +48,20 @@ pub enum Projection {
 /// A camera.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraDesc {
-    /// Camera-to-world transform; the camera looks down its local `+z` with `+y` up (pbrt's
-    /// convention: the transform given before `Camera` is world-to-camera).
+    /// Camera-to-world transform. Camera space has `+x` towards the image's right edge (growing
+    /// pixel column), `+y` towards its top edge (shrinking pixel row) and `+z` forward; so the
+    /// columns of this matrix are, in world space, the image's right axis, its up axis, the viewing
+    /// direction and the camera position. For a `W×H` film with `a = tan(fov/2)` and
+    /// `(sx, sy) = (a·W/H, a)` when `W ≥ H`, else `(a, a·H/W)`, the pinhole ray through the film
+    /// point `(px, py)` (pixels from the left and top edges) has the camera-space direction
+    /// `((2·px/W − 1)·sx, (1 − 2·py/H)·sy, 1)`, mapped to the world with `transform_vector3`; the
+    /// thin lens lies in the camera's `z = 0` plane and focuses on `z = focal_distance`.
+    ///
+    /// This is exactly pbrt's camera frame (the pbrt loader stores the inverse of the transform
+    /// in effect at `Camera`, which pbrt defines as world-to-camera). That frame is left-handed
+    /// (`x` right, `y` up, `z` into the image), so the 3×3 part may have a negative determinant,
+    /// e.g. for the Cornell box scene: use the columns as given and never rebuild the right axis
+    /// from `forward × up`, or images come out mirrored relative to pbrt's.
     pub camera_to_world: DMat4,
     /// Projection.
     pub projection: Projection,
@@ -90,7 +102,10 @@ pub struct AreaLightDesc {
 pub struct MeshDesc {
     /// Vertex positions.
     pub positions: Vec<DVec3>,
-    /// Optional shading normals per vertex.
+    /// Optional shading normals per vertex (world space, unit length or zero). The pbrt loader
+    /// flips them under `ReverseOrientation` (pbrt-v4 behaviour) and winds every triangle so that
+    /// its oriented geometric normal lies on the same side as the sum of its vertex normals, as
+    /// pbrt orients geometric normals towards shading normals.
     pub normals: Option<Vec<DVec3>>,
     /// Optional texture coordinates per vertex.
     pub uvs: Option<Vec<[f64; 2]>>,
@@ -100,7 +115,10 @@ pub struct MeshDesc {
     pub material: usize,
     /// Emission, when the mesh is an area light.
     pub area_light: Option<AreaLightDesc>,
-    /// Swap the geometric normal's orientation (pbrt `ReverseOrientation` / handedness).
+    /// Swap the geometric normal's orientation (pbrt `ReverseOrientation` / handedness): the
+    /// geometric normal of triangle `[i0, i1, i2]` is `normalize((p1 − p0) × (p2 − p0))`, negated
+    /// when this is set. The pbrt loader sets it to `ReverseOrientation` xor "the object-to-world
+    /// transform mirrors space", as pbrt does.
     pub flip_normals: bool,
     /// Where it was declared.
     pub location: Option<Location>,
@@ -117,7 +135,8 @@ pub struct SphereDesc {
     pub material: usize,
     /// Emission, when the sphere is an area light.
     pub area_light: Option<AreaLightDesc>,
-    /// Normals point inwards (pbrt `ReverseOrientation`).
+    /// Normals point inwards (pbrt `ReverseOrientation`, xor a mirroring object-to-world
+    /// transform, as pbrt does).
     pub flip_normals: bool,
     /// Where it was declared.
     pub location: Option<Location>,

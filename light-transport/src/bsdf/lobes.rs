@@ -1,0 +1,406 @@
+//! A fixed-capacity list of weighted lobes (no heap allocation per hit) and the dispatch of the
+//! four faces — sample, eval, pdf, invert — to the lobe kinds.
+//!
+//! Lobe `j` is chosen with probability `P_j(wo) = g_{G(j)} · w_j(wo) / Σ_{k ∈ G(j)} w_k(wo)`: the
+//! lobes of one material form a *group* `G` with a constant probability `g_G` (the product of the
+//! mean `amount`s of the enclosing mixes, renormalised over non-empty groups) shared among its
+//! lobes by their selection weights `w_j(wo)` (constant, or a Fresnel-weighted albedo for the
+//! layered material). The lobe number `u_lobe` picks lobe `j` when it falls in
+//! `[c_j, c_j + P_j)`, `c_j = Σ_{k<j} P_k`, and the lobe sees the rescaled number
+//! `u_sub = (u_lobe − c_j)/P_j ∈ [0, 1)` (which dielectric lobes use for their own branch choice).
+
+use super::TransportMode;
+use super::conductor::MicrofacetReflection;
+use super::dielectric::SmoothDielectric;
+use super::fresnel::dielectric;
+use super::lambert::Lambert;
+use super::mirror::SpecularReflection;
+use super::rough_dielectric::RoughDielectric;
+use crate::math::DVec3;
+use crate::spectrum::Rgb;
+use mcmc_core::ChainRng;
+use mcmc_core::rng::uniform;
+
+/// Largest number of lobes of one BSDF (after flattening mixes).
+pub const MAX_LOBES: usize = 8;
+
+/// Largest angle (radians, as a chord length) between two directions that are considered the
+/// same delta direction.
+pub const DELTA_TOLERANCE: f64 = 1e-6;
+
+/// What a lobe's sampler produced (local frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LobeSample {
+    /// Direction.
+    pub wi: DVec3,
+    /// Whether it is a delta direction.
+    pub delta: bool,
+    /// For delta samples: `f` (times `|cos θi|` the lobe's weight times `prob`).
+    pub f: Rgb,
+    /// For delta samples: the probability of the branch within the lobe.
+    pub prob: f64,
+}
+
+impl LobeSample {
+    /// A non-delta direction (value and density are evaluated by the caller).
+    pub fn smooth(wi: DVec3) -> Self {
+        Self {
+            wi,
+            delta: false,
+            f: Rgb::BLACK,
+            prob: 0.0,
+        }
+    }
+    /// A delta direction with value `f` chosen with probability `prob` inside the lobe.
+    pub fn delta(wi: DVec3, f: Rgb, prob: f64) -> Self {
+        Self {
+            wi,
+            delta: true,
+            f,
+            prob,
+        }
+    }
+}
+
+/// Whether two local directions are strictly on the same side of the surface.
+#[inline]
+pub fn same_side(a: DVec3, b: DVec3) -> bool {
+    (a.z > 0.0 && b.z > 0.0) || (a.z < 0.0 && b.z < 0.0)
+}
+
+/// Whether two unit directions coincide (to [`DELTA_TOLERANCE`]).
+#[inline]
+pub fn same_direction(a: DVec3, b: DVec3) -> bool {
+    (a - b).length_squared() < DELTA_TOLERANCE * DELTA_TOLERANCE
+}
+
+/// Mirror both directions through the tangent plane when `wo` is below it (two-sided lobes).
+#[inline]
+pub fn to_upper(wo: DVec3, wi: DVec3) -> (DVec3, DVec3) {
+    if wo.z < 0.0 {
+        (DVec3::new(wo.x, wo.y, -wo.z), DVec3::new(wi.x, wi.y, -wi.z))
+    } else {
+        (wo, wi)
+    }
+}
+
+/// A uniform number in `[a, b)` (`a < b`).
+#[inline]
+pub fn uniform_in(a: f64, b: f64, rng: &mut ChainRng) -> f64 {
+    let v = a + (b - a) * uniform(rng);
+    if v >= b {
+        b.next_down().max(a)
+    } else {
+        v.max(a)
+    }
+}
+
+/// The kinds of lobes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LobeKind {
+    /// Lambertian reflection.
+    Lambert(Lambert),
+    /// GGX reflection (rough conductor or coating).
+    Glossy(MicrofacetReflection),
+    /// Delta reflection.
+    Specular(SpecularReflection),
+    /// Smooth dielectric (delta reflection and refraction).
+    Dielectric(SmoothDielectric),
+    /// Rough dielectric (GGX reflection and transmission).
+    RoughDielectric(RoughDielectric),
+}
+
+impl LobeKind {
+    /// Whether the lobe is a delta lobe.
+    pub fn is_delta(&self) -> bool {
+        matches!(self, LobeKind::Specular(_) | LobeKind::Dielectric(_))
+    }
+
+    /// GGX roughnesses of a glossy lobe.
+    pub fn alpha(&self) -> Option<(f64, f64)> {
+        match self {
+            LobeKind::Glossy(g) => Some((g.ggx.alpha_x, g.ggx.alpha_y)),
+            LobeKind::RoughDielectric(g) => Some((g.ggx.alpha_x, g.ggx.alpha_y)),
+            _ => None,
+        }
+    }
+
+    fn sample(
+        &self,
+        wo: DVec3,
+        u_sub: f64,
+        u: [f64; 2],
+        mode: TransportMode,
+    ) -> Option<LobeSample> {
+        match self {
+            LobeKind::Lambert(l) => l.sample(wo, u),
+            LobeKind::Glossy(g) => g.sample(wo, u),
+            LobeKind::Specular(s) => s.sample(wo),
+            LobeKind::Dielectric(d) => d.sample(wo, u_sub, mode),
+            LobeKind::RoughDielectric(d) => d.sample(wo, u_sub, u),
+        }
+    }
+
+    fn eval(&self, wo: DVec3, wi: DVec3, mode: TransportMode) -> Rgb {
+        match self {
+            LobeKind::Lambert(l) => l.eval(wo, wi),
+            LobeKind::Glossy(g) => g.eval(wo, wi),
+            LobeKind::RoughDielectric(d) => d.eval(wo, wi, mode),
+            LobeKind::Specular(_) | LobeKind::Dielectric(_) => Rgb::BLACK,
+        }
+    }
+
+    fn pdf(&self, wo: DVec3, wi: DVec3) -> f64 {
+        match self {
+            LobeKind::Lambert(l) => l.pdf(wo, wi),
+            LobeKind::Glossy(g) => g.pdf(wo, wi),
+            LobeKind::RoughDielectric(d) => d.pdf(wo, wi),
+            LobeKind::Specular(_) | LobeKind::Dielectric(_) => 0.0,
+        }
+    }
+
+    fn eval_delta(&self, wo: DVec3, wi: DVec3, mode: TransportMode) -> Option<(Rgb, f64)> {
+        match self {
+            LobeKind::Specular(s) => s.eval_delta(wo, wi),
+            LobeKind::Dielectric(d) => d.eval_delta(wo, wi, mode),
+            _ => None,
+        }
+    }
+
+    fn invert(&self, wo: DVec3, wi: DVec3, rng: &mut ChainRng) -> Option<[f64; 3]> {
+        let two = |uv: Option<[f64; 2]>, rng: &mut ChainRng| {
+            uv.map(|[a, b]| [uniform_in(0.0, 1.0, rng), a, b])
+        };
+        match self {
+            LobeKind::Lambert(l) => two(l.invert(wo, wi), rng),
+            LobeKind::Glossy(g) => two(g.invert(wo, wi), rng),
+            LobeKind::Specular(s) => s.invert(wo, wi, rng),
+            LobeKind::Dielectric(d) => d.invert(wo, wi, rng),
+            LobeKind::RoughDielectric(d) => d.invert(wo, wi, rng),
+        }
+    }
+}
+
+/// How a lobe's selection weight depends on `wo`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Weight {
+    /// A constant.
+    Constant(f64),
+    /// `scale · F_dielectric(|cos θo|, eta)` (a coating's reflected share).
+    Fresnel {
+        /// Coating index.
+        eta: f64,
+        /// Albedo scale (`avg(Ks)`).
+        scale: f64,
+    },
+}
+
+impl Weight {
+    fn at(&self, wo: DVec3) -> f64 {
+        match *self {
+            Weight::Constant(c) => c,
+            Weight::Fresnel { eta, scale } => scale * dielectric(wo.z.abs(), eta),
+        }
+    }
+}
+
+/// One lobe: its kind, the per-channel factor of enclosing mixes, its group and weight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lobe {
+    /// The lobe.
+    pub kind: LobeKind,
+    /// Per-channel factor of `f` (product of mix amounts).
+    pub scale: Rgb,
+    /// Index of its group.
+    pub group: usize,
+    /// Selection weight within the group.
+    pub weight: Weight,
+}
+
+const EMPTY: Lobe = Lobe {
+    kind: LobeKind::Lambert(Lambert { r: Rgb::BLACK }),
+    scale: Rgb::BLACK,
+    group: 0,
+    weight: Weight::Constant(0.0),
+};
+
+/// The lobes of a BSDF.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lobes {
+    items: [Lobe; MAX_LOBES],
+    len: usize,
+    group_prob: [f64; MAX_LOBES],
+    groups: usize,
+}
+
+impl Default for Lobes {
+    fn default() -> Self {
+        Self {
+            items: [EMPTY; MAX_LOBES],
+            len: 0,
+            group_prob: [0.0; MAX_LOBES],
+            groups: 0,
+        }
+    }
+}
+
+/// Lobe selection probabilities at one `wo`.
+pub type Probabilities = [f64; MAX_LOBES];
+
+impl Lobes {
+    /// The lobes.
+    pub fn as_slice(&self) -> &[Lobe] {
+        &self.items[..self.len]
+    }
+
+    /// Open a new group of probability `prob`; `None` when full.
+    pub fn new_group(&mut self, prob: f64) -> Option<usize> {
+        if self.groups == MAX_LOBES {
+            return None;
+        }
+        self.group_prob[self.groups] = prob;
+        self.groups += 1;
+        Some(self.groups - 1)
+    }
+
+    /// Add a lobe; `Err(())` when the list is full.
+    pub fn push(&mut self, lobe: Lobe) -> Result<(), ()> {
+        if self.len == MAX_LOBES {
+            return Err(());
+        }
+        self.items[self.len] = lobe;
+        self.len += 1;
+        Ok(())
+    }
+
+    /// Renormalise group probabilities over the groups that hold lobes.
+    pub fn finish(&mut self) {
+        let mut used = [false; MAX_LOBES];
+        for l in self.as_slice() {
+            used[l.group] = true;
+        }
+        let total: f64 = (0..self.groups)
+            .filter(|&g| used[g])
+            .map(|g| self.group_prob[g])
+            .sum();
+        for g in 0..self.groups {
+            self.group_prob[g] = if used[g] && total > 0.0 {
+                self.group_prob[g] / total
+            } else {
+                0.0
+            };
+        }
+    }
+
+    /// `P_j(wo)` for every lobe.
+    pub fn probabilities(&self, wo: DVec3) -> Probabilities {
+        let mut w = [0.0; MAX_LOBES];
+        let mut sums = [0.0; MAX_LOBES];
+        for (j, l) in self.as_slice().iter().enumerate() {
+            let v = l.weight.at(wo);
+            w[j] = if v.is_finite() && v > 0.0 { v } else { 0.0 };
+            sums[l.group] += w[j];
+        }
+        for (j, l) in self.as_slice().iter().enumerate() {
+            let s = sums[l.group];
+            w[j] = if s > 0.0 {
+                self.group_prob[l.group] * w[j] / s
+            } else {
+                0.0
+            };
+        }
+        w
+    }
+
+    /// Pick the lobe of `u_lobe`: `(j, u_sub)`.
+    pub fn choose(&self, p: &Probabilities, u_lobe: f64) -> Option<(usize, f64)> {
+        let mut c = 0.0;
+        let mut last = None;
+        for (j, &pj) in p[..self.len].iter().enumerate() {
+            if pj <= 0.0 {
+                continue;
+            }
+            if u_lobe < c + pj {
+                return Some((j, ((u_lobe - c) / pj).clamp(0.0, 1.0_f64.next_down())));
+            }
+            c += pj;
+            last = Some(j);
+        }
+        // Rounding: u_lobe beyond the (slightly short) total goes to the last lobe.
+        last.map(|j| (j, 1.0_f64.next_down()))
+    }
+
+    /// `u_lobe` for lobe `j` and its rescaled number `u_sub` (inverse of [`Lobes::choose`]).
+    pub fn lobe_number(&self, p: &Probabilities, j: usize, u_sub: f64) -> f64 {
+        let c: f64 = p[..j].iter().filter(|&&v| v > 0.0).sum();
+        let next = c + p[j];
+        let u = c + p[j] * u_sub;
+        // Stay inside [c, c + P_j) after rounding; the last lobe keeps [c, 1).
+        let is_last = p[j + 1..self.len].iter().all(|&v| v <= 0.0);
+        let hi = if is_last { 1.0 } else { next };
+        if u >= hi {
+            hi.next_down().max(c)
+        } else {
+            u.max(c)
+        }
+    }
+
+    /// Sample lobe `j`.
+    pub fn sample(
+        &self,
+        j: usize,
+        wo: DVec3,
+        u_sub: f64,
+        u: [f64; 2],
+        mode: TransportMode,
+    ) -> Option<LobeSample> {
+        self.items[j].kind.sample(wo, u_sub, u, mode)
+    }
+
+    /// `Σ_j scale_j f_j(wo, wi)` over non-delta lobes.
+    pub fn eval(&self, wo: DVec3, wi: DVec3, mode: TransportMode) -> Rgb {
+        let mut f = Rgb::BLACK;
+        for l in self.as_slice() {
+            if !l.kind.is_delta() {
+                f += l.scale * l.kind.eval(wo, wi, mode);
+            }
+        }
+        f
+    }
+
+    /// Per-lobe `P_j(wo) pdf_j(wo, wi)` over non-delta lobes.
+    pub fn pdf_terms(&self, p: &Probabilities, wo: DVec3, wi: DVec3) -> Probabilities {
+        let mut t = [0.0; MAX_LOBES];
+        for (j, l) in self.as_slice().iter().enumerate() {
+            if p[j] > 0.0 && !l.kind.is_delta() {
+                t[j] = p[j] * l.kind.pdf(wo, wi);
+            }
+        }
+        t
+    }
+
+    /// Per-lobe `(scale_j f_j, P_j · branch probability)` of the delta lobes producing `wi`.
+    pub fn delta_terms(
+        &self,
+        p: &Probabilities,
+        wo: DVec3,
+        wi: DVec3,
+        mode: TransportMode,
+    ) -> [(Rgb, f64); MAX_LOBES] {
+        let mut t = [(Rgb::BLACK, 0.0); MAX_LOBES];
+        for (j, l) in self.as_slice().iter().enumerate() {
+            if p[j] > 0.0
+                && l.kind.is_delta()
+                && let Some((f, prob)) = l.kind.eval_delta(wo, wi, mode)
+            {
+                t[j] = (l.scale * f, p[j] * prob);
+            }
+        }
+        t
+    }
+
+    /// Lobe `j`'s inverse: `(u_sub, u0, u1)`.
+    pub fn invert(&self, j: usize, wo: DVec3, wi: DVec3, rng: &mut ChainRng) -> Option<[f64; 3]> {
+        self.items[j].kind.invert(wo, wi, rng)
+    }
+}
