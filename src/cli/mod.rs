@@ -1,10 +1,14 @@
 //! Command-line interface.
 
 mod algo;
+mod compare;
 mod duration;
 mod info;
+mod plot;
+mod reference;
 mod render;
 mod scene_arg;
+mod shard;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -40,6 +44,12 @@ pub struct Cli {
 enum Command {
     /// Render a scene (a pbrt-v3 file or a built-in scene: cornell, caustic, door).
     Render(render::RenderArgs),
+    /// Render a long reference image with an unbiased algorithm (default: BDPT, 1024 spp).
+    Reference(reference::ReferenceArgs),
+    /// Render with several algorithms for the same time and compare their errors over time.
+    Compare(compare::CompareArgs),
+    /// Merge partial renders (shards) of one scene into one image with correct weights.
+    Merge(shard::MergeArgs),
     /// Describe a scene: geometry, lights, materials, camera, what was ignored.
     Info(info::InfoArgs),
 }
@@ -49,6 +59,9 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         None => run(Cli::parse_from(["charted", "render"])),
         Some(Command::Render(a)) => render::run(a),
+        Some(Command::Reference(a)) => reference::run(a),
+        Some(Command::Compare(a)) => compare::run(a),
+        Some(Command::Merge(a)) => shard::run(a),
         Some(Command::Info(a)) => info::run(a),
     }
 }

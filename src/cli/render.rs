@@ -192,6 +192,7 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
     let t = Instant::now();
     let img = Image::from_film(&film);
     write_outputs(&img, &exr, &png, a.exposure)?;
+    super::shard::write_info(&exr, &super::shard::ShardInfo { samples: stats.passes as f64, seed: a.seed, algo: a.algo.name().into() })?;
     let write_time = t.elapsed();
     let secs = stats.elapsed.as_secs_f64().max(1e-9);
     println!(
