@@ -17,7 +17,11 @@ fn tmp(name: &str) -> PathBuf {
 
 fn run(cmd: &mut Command) -> (bool, String, String) {
     let out = cmd.output().expect("the binary runs");
-    (out.status.success(), String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr).into_owned())
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 #[test]
@@ -25,8 +29,15 @@ fn render_with_no_arguments_writes_the_default_scene() {
     let d = tmp("default");
     let (ok, stdout, stderr) = run(charted().current_dir(&d));
     assert!(ok, "{stderr}");
-    assert!(stdout.contains("rays") && stdout.contains("discarded  0"), "{stdout}");
-    for f in ["out/cornell-bdpt.exr", "out/cornell-bdpt.png", "out/cornell-bdpt.exr.samples"] {
+    assert!(
+        stdout.contains("rays") && stdout.contains("discarded  0"),
+        "{stdout}"
+    );
+    for f in [
+        "out/cornell-bdpt.exr",
+        "out/cornell-bdpt.png",
+        "out/cornell-bdpt.exr.samples",
+    ] {
         assert!(d.join(f).exists(), "{f} missing");
     }
     let _ = std::fs::remove_dir_all(&d);
@@ -37,16 +48,65 @@ fn every_subcommand_runs_on_a_tiny_image() {
     let d = tmp("all");
     let o = |f: &str| d.join(f).to_string_lossy().into_owned();
     for algo in ["pt", "lt", "bdpt"] {
-        let (ok, _, e) = run(charted().args(["render", "caustic", "--algo", algo, "--spp", "2", "--resolution", "24x16", "--quiet", "-o", &o(&format!("{algo}.exr"))]));
+        let (ok, _, e) = run(charted().args([
+            "render",
+            "caustic",
+            "--algo",
+            algo,
+            "--spp",
+            "2",
+            "--resolution",
+            "24x16",
+            "--quiet",
+            "-o",
+            &o(&format!("{algo}.exr")),
+        ]));
         assert!(ok, "{algo}: {e}");
     }
-    let (ok, _, e) = run(charted().args(["render", "caustic", "--spp", "2", "--resolution", "24x16", "--quiet", "--seed", "5", "-o", &o("b.exr")]));
+    let (ok, _, e) = run(charted().args([
+        "render",
+        "caustic",
+        "--spp",
+        "2",
+        "--resolution",
+        "24x16",
+        "--quiet",
+        "--seed",
+        "5",
+        "-o",
+        &o("b.exr"),
+    ]));
     assert!(ok, "{e}");
-    let (ok, out, e) = run(charted().args(["merge", &o("bdpt.exr"), &o("b.exr"), "-o", &o("merged.exr")]));
+    let (ok, out, e) =
+        run(charted().args(["merge", &o("bdpt.exr"), &o("b.exr"), "-o", &o("merged.exr")]));
     assert!(ok && out.contains("4 samples per pixel"), "{out}{e}");
-    let (ok, _, e) = run(charted().args(["reference", "caustic", "--spp", "4", "--resolution", "24x16", "-o", &o("ref.exr")]));
+    let (ok, _, e) = run(charted().args([
+        "reference",
+        "caustic",
+        "--spp",
+        "4",
+        "--resolution",
+        "24x16",
+        "-o",
+        &o("ref.exr"),
+    ]));
     assert!(ok, "{e}");
-    let (ok, out, e) = run(charted().args(["compare", "caustic", "--algos", "pt,bdpt", "--time", "1s", "--checkpoints", "2", "--resolution", "24x16", "--reference", &o("ref.exr"), "-o", &o("cmp")]));
+    let (ok, out, e) = run(charted().args([
+        "compare",
+        "caustic",
+        "--algos",
+        "pt,bdpt",
+        "--time",
+        "1s",
+        "--checkpoints",
+        "2",
+        "--resolution",
+        "24x16",
+        "--reference",
+        &o("ref.exr"),
+        "-o",
+        &o("cmp"),
+    ]));
     assert!(ok, "{e}");
     assert!(out.contains("pt") && out.contains("bdpt"), "{out}");
     let csv = std::fs::read_to_string(d.join("cmp/errors.csv")).unwrap();
@@ -61,19 +121,45 @@ fn every_subcommand_runs_on_a_tiny_image() {
 fn bad_input_gives_clear_errors() {
     let d = tmp("bad");
     let bad = d.join("bad.pbrt");
-    std::fs::write(&bad, "Camera \"perspective\" \"float fov\" [ 40 ]\nWorldBegin\nFrobnicate 3\nWorldEnd\n").unwrap();
+    std::fs::write(
+        &bad,
+        "Camera \"perspective\" \"float fov\" [ 40 ]\nWorldBegin\nFrobnicate 3\nWorldEnd\n",
+    )
+    .unwrap();
     let cases: Vec<(Vec<String>, &str)> = vec![
-        (vec!["render".into(), bad.to_string_lossy().into_owned()], "bad.pbrt:3"),
+        (
+            vec!["render".into(), bad.to_string_lossy().into_owned()],
+            "bad.pbrt:3",
+        ),
         (vec!["render".into(), "no-such-scene".into()], "no scene"),
-        (vec!["render".into(), "--resolution".into(), "100000x2".into()], "resolution"),
+        (
+            vec!["render".into(), "--resolution".into(), "100000x2".into()],
+            "resolution",
+        ),
         (vec!["render".into(), "--time=-3s".into()], "duration"),
-        (vec!["render".into(), "--spp".into(), "0".into()], "at least 1"),
-        (vec!["compare".into(), "cornell".into(), "--reference".into(), "/nonexistent.exr".into(), "--time".into(), "1s".into()], "nonexistent"),
+        (
+            vec!["render".into(), "--spp".into(), "0".into()],
+            "at least 1",
+        ),
+        (
+            vec![
+                "compare".into(),
+                "cornell".into(),
+                "--reference".into(),
+                "/nonexistent.exr".into(),
+                "--time".into(),
+                "1s".into(),
+            ],
+            "nonexistent",
+        ),
     ];
     for (args, needle) in cases {
         let (ok, out, err) = run(charted().args(&args).current_dir(&d));
         assert!(!ok, "{args:?} succeeded: {out}");
-        assert!(err.contains(needle), "{args:?}: expected {needle:?} in {err:?}");
+        assert!(
+            err.contains(needle),
+            "{args:?}: expected {needle:?} in {err:?}"
+        );
         assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
     }
     let _ = std::fs::remove_dir_all(Path::new(&d));

@@ -11,6 +11,7 @@
 //! over independent runs), the checker results of both charts, and writes the images, error images
 //! and a mosaic to `out/plane_two_lights/`.
 
+#[allow(dead_code)] // only the colour ramp and the --quick flag are used here
 #[path = "../support/mod.rs"]
 mod support;
 
@@ -32,6 +33,9 @@ fn main() {
         std::process::exit(1);
     }
 }
+
+/// (algorithm, n, RMSE per run, acceptance, swap acceptance, seconds per run).
+type TableRow = (Algorithm, usize, Vec<f64>, f64, Option<f64>, f64);
 
 struct Plan {
     ns: Vec<(usize, usize)>, // (samples, independent runs)
@@ -147,7 +151,7 @@ fn try_main() -> Result<(), String> {
         norm.b, norm.rel_se, norm.b_chart[0], norm.b_chart[1]
     );
 
-    let mut table: Vec<(Algorithm, usize, Vec<f64>, f64, Option<f64>, f64)> = Vec::new();
+    let mut table: Vec<TableRow> = Vec::new();
     let mut channels: Vec<(Algorithm, usize, [f64; 3])> = Vec::new();
     for &(n, runs) in &plan.ns {
         let jobs: Vec<(Algorithm, usize)> = Algorithm::WITH_ST
@@ -265,12 +269,12 @@ fn try_main() -> Result<(), String> {
             mean(Algorithm::PssmltAvg),
             mean(Algorithm::CmltIpsm),
         );
-        let best = Algorithm::ALL
-            .iter()
-            .map(|&a| (mean(a), a))
-            .fold((f64::INFINITY, Algorithm::Cmlt), |b, x| {
+        let best = Algorithm::ALL.iter().map(|&a| (mean(a), a)).fold(
+            (f64::INFINITY, Algorithm::Cmlt),
+            |b, x| {
                 if x.0 < b.0 { x } else { b }
-            });
+            },
+        );
         println!(
             "n = {n}: best of the paper's six {} | CMLT best: {} | MIX < AVG: {} | IPSM between MIX and AVG: {} | CMLT-ST vs PSSMLT-2: {:.1}%",
             best.1.name(),

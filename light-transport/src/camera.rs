@@ -74,8 +74,10 @@ impl Camera {
                 reason: format!("must be in (0°, 180°), got {}°", fov.to_degrees()),
             });
         }
-        if !(lens_radius >= 0.0 && lens_radius.is_finite())
-            || !(focal_distance > 0.0 && focal_distance.is_finite())
+        if !(lens_radius >= 0.0
+            && lens_radius.is_finite()
+            && focal_distance > 0.0
+            && focal_distance.is_finite())
         {
             return Err(Error::InvalidParameter {
                 name: "lensradius/focaldistance".into(),

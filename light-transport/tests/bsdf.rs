@@ -5,15 +5,21 @@
 //! Every statistical test is seeded (the outcome is deterministic) and states its false-positive
 //! rate, i.e. the probability that it would fail on a correct BSDF for a random seed:
 //!
-//! * furnace agreement: per channel and configuration a 6σ two-sided z-test (≈ 2e-9 each, ≈ 1e-6
-//!   over all configurations);
-//! * chi-square of sampled directions against `pdf`: level `1e-3 / #configurations` each (Šidák),
-//!   family-wise 1e-3;
-//! * chart checker (mcmc-charts): family-wise level `1e-4` per check and configuration as
-//!   configured below, ≈ 1e-2 over all configurations in the worst case (Bonferroni bound; the
-//!   checks are conservative).
+//! * furnace: sampling estimate against deterministic quadrature (tolerance 6σ of the sampling
+//!   estimate plus 0.2% quadrature error) and against uniform-sphere Monte Carlo for broad lobes
+//!   (6σ): ≈ 2e-9 per comparison, < 1e-5 over the ≈ 1300 comparisons;
+//! * chi-square of sampled directions against `pdf` (109 configurations): level
+//!   `1 − (1 − 1e-3)^(1/109)` ≈ 9.2e-6 each (Šidák), family-wise 1e-3;
+//! * chart checker (mcmc-charts, 85 configurations): each of its statistical checks (uniformity of
+//!   `R(T(U))`, density) at family-wise level 1e-4, so ≤ 2·85·1e-4 ≈ 1.7e-2 over the file
+//!   (Bonferroni bound).
 //!
-//! Wall time: the whole file runs in a few seconds with `cargo test --release`.
+//! Directions are binned, and cell integrals computed, in *unstretched microfacet-normal* space
+//! ([`HalfGrid`]): there every GGX lobe — α = 1e-4, anisotropic, or refracting with η = 1.0001 —
+//! looks like the broad α = 1 lobe, so Gauss–Legendre quadrature per cell is accurate and a simple
+//! reference law importance-samples it.
+//!
+//! Wall time: ≈ 8 s for the whole file with `cargo test --release` on two busy cores.
 
 use light_transport::bsdf::{Bsdf, TransportMode};
 use light_transport::math::{DVec3, Frame};
@@ -328,6 +334,19 @@ fn cases() -> Vec<Case> {
             standard(),
         ),
         case(
+            // Two delta lobes produce the same mirror direction.
+            "mix mirror+glass",
+            vec![
+                MaterialDesc::Mirror {
+                    kr: Rgb::splat(0.8),
+                },
+                glass(1.5, 0.0, 0.0),
+                mix(0, 1, Rgb::splat(0.5)),
+            ],
+            dielectric(1.5, 1.0, 1.0, false),
+            with_tir(),
+        ),
+        case(
             "mix rough glass+matte",
             vec![glass(1.5, 0.2, 0.2), matte(0.8), mix(0, 1, Rgb::splat(0.6))],
             dielectric(1.5, 0.2, 0.2, true),
@@ -444,10 +463,15 @@ impl HalfGrid {
         let eta = eta.map(|e| if sign > 0.0 { e } else { 1.0 / e });
         let ag = (ax * ay).sqrt();
         let mut th: Vec<f64> = (1..16).map(|i| i as f64 * PI / 32.0).collect();
-        for k in 1..16 {
-            let tm = k as f64 * PI / 32.0;
-            th.push((tm.tan() / ag).atan());
+        // Images of θ_m edges (uniform, then halving down to the roughness) resolve broad lobes
+        // (Lambert), which the stretch squeezes toward the equator of m'.
+        let mut tm_edges: Vec<f64> = (1..16).map(|k| k as f64 * PI / 32.0).collect();
+        let mut tm = PI / 64.0;
+        while tm > 0.5 * ag {
+            tm_edges.push(tm);
+            tm *= 0.5;
         }
+        th.extend(tm_edges.iter().map(|tm| (tm.tan() / ag).atan()));
         let reflect_share = if eta.is_some() { 0.5 } else { 1.0 };
         Self {
             wo,
@@ -495,7 +519,7 @@ impl HalfGrid {
     /// The (oriented) direction of side `side` through microfacet `m`, with `dω_i/dω_m`.
     fn scatter(&self, side: Side, m: DVec3) -> Option<(DVec3, f64)> {
         let c = self.wo.dot(m);
-        if !(c > 0.0) {
+        if c.is_nan() || c <= 0.0 {
             return None;
         }
         match side {
@@ -553,7 +577,7 @@ impl HalfGrid {
     /// the integrand vanishes continuously: back-facing microfacets, total internal reflection).
     fn on_side(&self, side: Side, m: DVec3) -> Option<bool> {
         let c = self.wo.dot(m);
-        if !(c > 0.0) {
+        if c.is_nan() || c <= 0.0 {
             return None;
         }
         match side {
@@ -721,7 +745,7 @@ impl HalfGrid {
             let r = 1.0 / (2.0 * PI) / (4.0 * self.wo.dot(m).abs() * self.jacobian_m(m));
             let fallback = self
                 .eta
-                .is_some_and(|e| !(self.wo.dot(m) > 0.0) || refract_about(self.wo, m, e).is_none());
+                .is_some_and(|e| self.wo.dot(m) <= 0.0 || refract_about(self.wo, m, e).is_none());
             q += 0.5 * r * (p_refl + if fallback { 1.0 - p_refl } else { 0.0 });
         }
         // Refraction through m = ±normalize(wo + η wi) (the one with m.z > 0), on either side.
@@ -1039,16 +1063,15 @@ fn chi_square(
     expected.push((n as f64 - mass).max(0.0));
     // Samples where the quadrature sees no mass at all: a few can fall in slivers of support the
     // quadrature nodes miss (they are pooled below); many mean a real mismatch.
-    for c in 0..=cells {
-        if expected[c] < 1e-9 * n as f64 && observed[c] > 5.0 {
-            return (
-                0.0,
-                format!(
-                    "{} samples in cell {c} of expected mass {}",
-                    observed[c], expected[c]
-                ),
-            );
-        }
+    let stray: f64 = (0..=cells)
+        .filter(|&c| expected[c] < 1e-9 * n as f64)
+        .map(|c| observed[c])
+        .sum();
+    if stray > 1e-3 * n as f64 {
+        return (
+            0.0,
+            format!("{stray} samples in cells of zero expected mass"),
+        );
     }
     let (mut pool_o, mut pool_e) = (0.0, 0.0);
     let mut cats: Vec<(f64, f64)> = Vec::new();
@@ -1144,7 +1167,7 @@ fn sampled_directions_follow_the_pdf() {
                 wo_l.z,
                 grid.cells()
             );
-            if !(p > level) {
+            if p.is_nan() || p <= level {
                 failures.push(format!("{} wo {wo_l:?}: p = {p:.3e} ({detail})", case.name));
             }
         }
@@ -1387,15 +1410,16 @@ fn delta_charts_round_trip_with_uniform_inverse() {
     run_checker(&|c| c.bsdf.has_delta());
 }
 
-/// Test of the test: choosing the lobe 50/50 instead of by density share must fail the checker
-/// for the layered material and the mixes (non-injective charts).
+/// Test of the test: choosing the lobe uniformly among those that can produce the direction
+/// instead of by density share must fail the checker for the layered material, the mixes, and two
+/// delta lobes producing the same direction (non-injective charts).
 #[test]
 fn a_wrong_lobe_choice_fails_the_checker() {
     for name in [
         "layered a=0.2",
         "mix layered+conductor",
         "nested mix",
-        "layered smooth coat",
+        "mix mirror+glass",
     ] {
         let all = cases();
         let case = all.iter().find(|c| c.name == name).expect("case exists");
@@ -1403,10 +1427,6 @@ fn a_wrong_lobe_choice_fails_the_checker() {
         let right = check(case, oblique(), Inverse::Exact, 998);
         println!("wrong inverse: {wrong}");
         assert!(right.passed(), "{right}");
-        if case.bsdf.has_delta() {
-            // A delta direction is produced by one lobe only here: the wrong rule has no effect.
-            continue;
-        }
         assert!(wrong.round_trip.passed, "{wrong}");
         assert!(
             !wrong.inverse_uniformity.passed,

@@ -2,12 +2,12 @@
 //! the error against a reference at checkpoints, and write a CSV, a plot of error against time, the
 //! final images with their error images, and one side-by-side PNG.
 
+use super::CliError;
 use super::algo::{self, Algo, Common};
 use super::duration::parse_duration;
 use super::plot::{Series, error_plot};
 use super::render::{Heuristic, write_outputs};
 use super::scene_arg::{self, parse_resolution};
-use super::CliError;
 use clap::Args;
 use light_transport::film::{Image, error_image, metrics, read_image, write_bytes_png};
 use light_transport::integrators::{Budget, Estimator, render};
@@ -33,7 +33,7 @@ pub struct CompareArgs {
     /// Number of checkpoints.
     #[arg(long, default_value_t = 5)]
     pub checkpoints: usize,
-    /// Output folder. Default: out/compare-<scene>.
+    /// Output folder. Default: `out/compare-<scene>`.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
     /// Maximum number of bounces.
@@ -63,14 +63,30 @@ struct Row {
     rel_mse: f64,
 }
 
-fn track<E: Estimator>(scene: &Scene, est: &E, a: &CompareArgs, name: &'static str, reference: &Image, rows: &mut Vec<Row>) -> Result<Image, CliError> {
-    let marks: Vec<Duration> = (1..=a.checkpoints.max(1)).map(|k| a.time.mul_f64(k as f64 / a.checkpoints.max(1) as f64)).collect();
+fn track<E: Estimator>(
+    scene: &Scene,
+    est: &E,
+    a: &CompareArgs,
+    name: &'static str,
+    reference: &Image,
+    rows: &mut Vec<Row>,
+) -> Result<Image, CliError> {
+    let marks: Vec<Duration> = (1..=a.checkpoints.max(1))
+        .map(|k| a.time.mul_f64(k as f64 / a.checkpoints.max(1) as f64))
+        .collect();
     let mut next = 0;
     let mut err: Option<CliError> = None;
     let (film, stats) = render(scene, est, Budget::Time(a.time), a.seed, |film, p| {
         while next < marks.len() && p.elapsed >= marks[next] {
             match metrics(&Image::from_film(film), reference) {
-                Ok(m) => rows.push(Row { algo: name, checkpoint: next + 1, seconds: p.elapsed.as_secs_f64(), spp: p.passes, rmse: m.rmse, rel_mse: m.rel_mse }),
+                Ok(m) => rows.push(Row {
+                    algo: name,
+                    checkpoint: next + 1,
+                    seconds: p.elapsed.as_secs_f64(),
+                    spp: p.passes,
+                    rmse: m.rmse,
+                    rel_mse: m.rel_mse,
+                }),
                 Err(e) => err = Some(e.into()),
             }
             next += 1;
@@ -81,59 +97,154 @@ fn track<E: Estimator>(scene: &Scene, est: &E, a: &CompareArgs, name: &'static s
         return Err(e);
     }
     let img = Image::from_film(&film);
-    eprintln!("  {name}: {} samples per pixel in {:.1} s, {:.2} M rays/s", stats.passes, stats.elapsed.as_secs_f64(), stats.rays as f64 / stats.elapsed.as_secs_f64().max(1e-9) / 1e6);
+    eprintln!(
+        "  {name}: {} samples per pixel in {:.1} s, {:.2} M rays/s",
+        stats.passes,
+        stats.elapsed.as_secs_f64(),
+        stats.rays as f64 / stats.elapsed.as_secs_f64().max(1e-9) / 1e6
+    );
     Ok(img)
 }
 
 pub fn run(a: CompareArgs) -> Result<(), CliError> {
     if a.algos.is_empty() {
-        return Err(CliError::Usage("--algos needs at least one algorithm".into()));
+        return Err(CliError::Usage(
+            "--algos needs at least one algorithm".into(),
+        ));
     }
     let loaded = scene_arg::load(&a.scene)?;
     let (scene, _) = scene_arg::build(&loaded, a.resolution)?;
-    let dir = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("out/compare-{}", loaded.name)));
-    std::fs::create_dir_all(&dir).map_err(|source| CliError::Io { path: dir.clone(), source })?;
-    let common = Common { max_edges: a.max_depth + 1, heuristic: a.mis.into() };
+    let dir = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("out/compare-{}", loaded.name)));
+    std::fs::create_dir_all(&dir).map_err(|source| CliError::Io {
+        path: dir.clone(),
+        source,
+    })?;
+    let common = Common {
+        max_edges: a.max_depth + 1,
+        heuristic: a.mis.into(),
+    };
     let reference = match &a.reference {
         Some(p) => read_image(p)?,
         None => {
             let t = a.time * 4;
-            eprintln!("no --reference: rendering one with bdpt for {:.0} s", t.as_secs_f64());
-            let (film, _) = render(&scene, &algo::bdpt(&common), Budget::Time(t), a.seed ^ 0xABCD, |_, _| true);
+            eprintln!(
+                "no --reference: rendering one with bdpt for {:.0} s",
+                t.as_secs_f64()
+            );
+            let (film, _) = render(
+                &scene,
+                &algo::bdpt(&common),
+                Budget::Time(t),
+                a.seed ^ 0xABCD,
+                |_, _| true,
+            );
             let img = Image::from_film(&film);
-            write_outputs(&img, &dir.join("reference.exr"), &dir.join("reference.png"), a.exposure)?;
+            write_outputs(
+                &img,
+                &dir.join("reference.exr"),
+                &dir.join("reference.png"),
+                a.exposure,
+            )?;
             img
         }
     };
     if (reference.width, reference.height) != (scene.camera.width, scene.camera.height) {
         return Err(CliError::Usage(format!(
             "the reference is {}×{} but the render is {}×{}: pass --resolution {}x{}",
-            reference.width, reference.height, scene.camera.width, scene.camera.height, reference.width, reference.height
+            reference.width,
+            reference.height,
+            scene.camera.width,
+            scene.camera.height,
+            reference.width,
+            reference.height
         )));
     }
     let mut rows = Vec::new();
     let mut finals = Vec::new();
     for algo in &a.algos {
-        eprintln!("rendering {} for {:.1} s", algo.name(), a.time.as_secs_f64());
+        eprintln!(
+            "rendering {} for {:.1} s",
+            algo.name(),
+            a.time.as_secs_f64()
+        );
         let img = match algo {
-            Algo::Pt => track(&scene, &algo::path_tracer(&common), &a, "pt", &reference, &mut rows)?,
-            Algo::Lt => track(&scene, &algo::light_tracer(&common), &a, "lt", &reference, &mut rows)?,
-            Algo::Bdpt => track(&scene, &algo::bdpt(&common), &a, "bdpt", &reference, &mut rows)?,
+            Algo::Pt => track(
+                &scene,
+                &algo::path_tracer(&common),
+                &a,
+                "pt",
+                &reference,
+                &mut rows,
+            )?,
+            Algo::Lt => track(
+                &scene,
+                &algo::light_tracer(&common),
+                &a,
+                "lt",
+                &reference,
+                &mut rows,
+            )?,
+            Algo::Bdpt => track(
+                &scene,
+                &algo::bdpt(&common),
+                &a,
+                "bdpt",
+                &reference,
+                &mut rows,
+            )?,
         };
-        write_outputs(&img, &dir.join(format!("{}.exr", algo.name())), &dir.join(format!("{}.png", algo.name())), a.exposure)?;
+        write_outputs(
+            &img,
+            &dir.join(format!("{}.exr", algo.name())),
+            &dir.join(format!("{}.png", algo.name())),
+            a.exposure,
+        )?;
         finals.push((algo.name(), img));
     }
     // CSV.
     let csv = dir.join("errors.csv");
-    let mut f = std::fs::File::create(&csv).map_err(|source| CliError::Io { path: csv.clone(), source })?;
-    let io = |source| CliError::Io { path: csv.clone(), source };
+    let mut f = std::fs::File::create(&csv).map_err(|source| CliError::Io {
+        path: csv.clone(),
+        source,
+    })?;
+    let io = |source| CliError::Io {
+        path: csv.clone(),
+        source,
+    };
     writeln!(f, "algorithm,checkpoint,seconds,spp,rmse,relmse").map_err(io)?;
     for r in &rows {
-        writeln!(f, "{},{},{:.3},{},{:.6e},{:.6e}", r.algo, r.checkpoint, r.seconds, r.spp, r.rmse, r.rel_mse).map_err(|source| CliError::Io { path: csv.clone(), source })?;
+        writeln!(
+            f,
+            "{},{},{:.3},{},{:.6e},{:.6e}",
+            r.algo, r.checkpoint, r.seconds, r.spp, r.rmse, r.rel_mse
+        )
+        .map_err(|source| CliError::Io {
+            path: csv.clone(),
+            source,
+        })?;
     }
     // Plot.
-    let series: Vec<Series> = finals.iter().map(|(n, _)| Series { name: n.to_string(), points: rows.iter().filter(|r| r.algo == *n).map(|r| (r.seconds, r.rmse)).collect() }).collect();
-    let plots = error_plot(&dir.join("rmse"), &format!("{}: RMSE against time", loaded.name), "RMSE", &series).map_err(CliError::Usage)?;
+    let series: Vec<Series> = finals
+        .iter()
+        .map(|(n, _)| Series {
+            name: n.to_string(),
+            points: rows
+                .iter()
+                .filter(|r| r.algo == *n)
+                .map(|r| (r.seconds, r.rmse))
+                .collect(),
+        })
+        .collect();
+    let plots = error_plot(
+        &dir.join("rmse"),
+        &format!("{}: RMSE against time", loaded.name),
+        "RMSE",
+        &series,
+    )
+    .map_err(CliError::Usage)?;
     // Side by side: reference | each algorithm, and the error images underneath.
     let mut tiles: Vec<Vec<[u8; 3]>> = vec![to_srgb(&reference, a.exposure)];
     let mut errs: Vec<Vec<[u8; 3]>> = vec![error_image(&reference, &reference, 1.0)?];
@@ -149,21 +260,42 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
     for (i, t) in tiles.iter().enumerate() {
         let (ox, oy) = ((i % cols) * (w + 4), (i / cols) * (h + 4));
         for y in 0..h {
-            mosaic[(oy + y) * mw + ox..(oy + y) * mw + ox + w].copy_from_slice(&t[y * w..(y + 1) * w]);
+            mosaic[(oy + y) * mw + ox..(oy + y) * mw + ox + w]
+                .copy_from_slice(&t[y * w..(y + 1) * w]);
         }
     }
     let side = dir.join("side_by_side.png");
     write_bytes_png(mw, mh, &mosaic, &side)?;
-    println!("{:<8} {:>10} {:>8} {:>12} {:>12}", "algo", "seconds", "spp", "RMSE", "relMSE");
+    println!(
+        "{:<8} {:>10} {:>8} {:>12} {:>12}",
+        "algo", "seconds", "spp", "RMSE", "relMSE"
+    );
     for r in rows.iter().filter(|r| r.checkpoint == a.checkpoints.max(1)) {
-        println!("{:<8} {:>10.1} {:>8} {:>12.4e} {:>12.4e}", r.algo, r.seconds, r.spp, r.rmse, r.rel_mse);
+        println!(
+            "{:<8} {:>10.1} {:>8} {:>12.4e} {:>12.4e}",
+            r.algo, r.seconds, r.spp, r.rmse, r.rel_mse
+        );
     }
-    println!("wrote {}, {}, {} (top: reference and images; bottom: relative error, yellow = 50%)", csv.display(), plots.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "), side.display());
+    println!(
+        "wrote {}, {}, {} (top: reference and images; bottom: relative error, yellow = 50%)",
+        csv.display(),
+        plots
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        side.display()
+    );
     Ok(())
 }
 
 fn to_srgb(img: &Image, exposure: f64) -> Vec<[u8; 3]> {
     let s = 2f64.powf(exposure);
-    let to8 = |v: f64| (light_transport::film::srgb_encode((v * s).clamp(0.0, 1.0)) * 255.0).round() as u8;
-    img.pixels.iter().map(|p| [to8(p[0]), to8(p[1]), to8(p[2])]).collect()
+    let to8 = |v: f64| {
+        (light_transport::film::srgb_encode((v * s).clamp(0.0, 1.0)) * 255.0).round() as u8
+    };
+    img.pixels
+        .iter()
+        .map(|p| [to8(p[0]), to8(p[1]), to8(p[2])])
+        .collect()
 }

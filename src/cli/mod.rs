@@ -2,6 +2,7 @@
 
 mod algo;
 mod compare;
+mod diff;
 mod duration;
 mod info;
 mod plot;
@@ -50,6 +51,8 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Merge partial renders (shards) of one scene into one image with correct weights.
     Merge(shard::MergeArgs),
+    /// Error metrics of an image against a reference, and an error image.
+    Diff(diff::DiffArgs),
     /// Describe a scene: geometry, lights, materials, camera, what was ignored.
     Info(info::InfoArgs),
 }
@@ -62,6 +65,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Some(Command::Reference(a)) => reference::run(a),
         Some(Command::Compare(a)) => compare::run(a),
         Some(Command::Merge(a)) => shard::run(a),
+        Some(Command::Diff(a)) => diff::run(a),
         Some(Command::Info(a)) => info::run(a),
     }
 }

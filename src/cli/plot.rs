@@ -34,13 +34,21 @@ fn register_font() -> bool {
     })
 }
 
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, title: &str, y_label: &str, series: &[Series]) -> Result<(), String>
+fn draw<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<(), String>
 where
     DB::ErrorType: 'static,
 {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(err)?;
-    let pts = series.iter().flat_map(|s| s.points.iter()).filter(|p| p.0 > 0.0 && p.1 > 0.0);
+    let pts = series
+        .iter()
+        .flat_map(|s| s.points.iter())
+        .filter(|p| p.0 > 0.0 && p.1 > 0.0);
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);
     for &(x, y) in pts {
         x0 = x0.min(x);
@@ -59,29 +67,71 @@ where
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
-        .build_cartesian_2d((x0 * 0.9..x1 * 1.1).log_scale(), (y0 * 0.8..y1 * 1.25).log_scale())
+        .build_cartesian_2d(
+            (x0 * 0.9..x1 * 1.1).log_scale(),
+            (y0 * 0.8..y1 * 1.25).log_scale(),
+        )
         .map_err(err)?;
-    chart.configure_mesh().x_desc("time [s]").y_desc(y_label).draw().map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("time [s]")
+        .y_desc(y_label)
+        .draw()
+        .map_err(err)?;
     for (i, s) in series.iter().enumerate() {
         let c = Palette99::pick(i).to_rgba();
-        let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| p.0 > 0.0 && p.1 > 0.0).collect();
-        chart.draw_series(LineSeries::new(pts.clone(), c.stroke_width(2))).map_err(err)?.label(s.name.clone()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
-        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled()))).map_err(err)?;
+        let pts: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .copied()
+            .filter(|p| p.0 > 0.0 && p.1 > 0.0)
+            .collect();
+        chart
+            .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))
+            .map_err(err)?
+            .label(s.name.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))
+            .map_err(err)?;
     }
-    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw().map_err(err)?;
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
     root.present().map_err(err)?;
     Ok(())
 }
 
 /// Write `<stem>.png` and `<stem>.svg`. Returns the files written (none when no font was found).
-pub fn error_plot(stem: &Path, title: &str, y_label: &str, series: &[Series]) -> Result<Vec<std::path::PathBuf>, String> {
+pub fn error_plot(
+    stem: &Path,
+    title: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<Vec<std::path::PathBuf>, String> {
     if !register_font() {
-        eprintln!("note: no DejaVu font found ({}); skipping the plot, the CSV has the data", FONTS.join(", "));
+        eprintln!(
+            "note: no DejaVu font found ({}); skipping the plot, the CSV has the data",
+            FONTS.join(", ")
+        );
         return Ok(vec![]);
     }
     let png = stem.with_extension("png");
-    draw(BitMapBackend::new(&png, (800, 560)).into_drawing_area(), title, y_label, series)?;
+    draw(
+        BitMapBackend::new(&png, (800, 560)).into_drawing_area(),
+        title,
+        y_label,
+        series,
+    )?;
     let svg = stem.with_extension("svg");
-    draw(SVGBackend::new(&svg, (800, 560)).into_drawing_area(), title, y_label, series)?;
+    draw(
+        SVGBackend::new(&svg, (800, 560)).into_drawing_area(),
+        title,
+        y_label,
+        series,
+    )?;
     Ok(vec![png, svg])
 }

@@ -1,10 +1,10 @@
 //! `charted reference`: a long unbiased render to compare against (BDPT by default).
 
+use super::CliError;
 use super::algo::Algo;
 use super::duration::parse_duration;
 use super::render::{self, Heuristic, RenderArgs};
 use super::scene_arg::parse_resolution;
-use super::CliError;
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -24,7 +24,7 @@ pub struct ReferenceArgs {
     /// Wall-clock budget.
     #[arg(long, value_parser = parse_duration)]
     pub time: Option<Duration>,
-    /// Output. Default: out/<scene>-reference.exr.
+    /// Output. Default: `out/<scene>-reference.exr`.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
     /// Maximum number of bounces.
@@ -41,8 +41,15 @@ pub struct ReferenceArgs {
 pub fn run(a: ReferenceArgs) -> Result<(), CliError> {
     let name = super::scene_arg::load(&a.scene)?.name;
     render::run(RenderArgs {
-        output: Some(a.output.unwrap_or_else(|| PathBuf::from(format!("out/{name}-reference.exr")))),
-        spp: if a.time.is_none() { Some(a.spp.unwrap_or(1024)) } else { None },
+        output: Some(
+            a.output
+                .unwrap_or_else(|| PathBuf::from(format!("out/{name}-reference.exr"))),
+        ),
+        spp: if a.time.is_none() {
+            Some(a.spp.unwrap_or(1024))
+        } else {
+            None
+        },
         time: a.time,
         scene: a.scene,
         algo: a.algo,

@@ -33,7 +33,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Output file (.exr; a .png with the same stem is written beside it). Default:
-    /// out/<scene>-<algo>.exr.
+    /// `out/<scene>-<algo>.exr`.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
     /// Maximum number of bounces (pbrt's maxdepth; paths have at most maxdepth + 1 edges).
@@ -192,7 +192,14 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
     let t = Instant::now();
     let img = Image::from_film(&film);
     write_outputs(&img, &exr, &png, a.exposure)?;
-    super::shard::write_info(&exr, &super::shard::ShardInfo { samples: stats.passes as f64, seed: a.seed, algo: a.algo.name().into() })?;
+    super::shard::write_info(
+        &exr,
+        &super::shard::ShardInfo {
+            samples: stats.passes as f64,
+            seed: a.seed,
+            algo: a.algo.name().into(),
+        },
+    )?;
     let write_time = t.elapsed();
     let secs = stats.elapsed.as_secs_f64().max(1e-9);
     println!(

@@ -28,17 +28,39 @@ fn sidecar(exr: &Path) -> PathBuf {
 /// Write the sidecar of `exr`.
 pub fn write_info(exr: &Path, info: &ShardInfo) -> Result<(), CliError> {
     let p = sidecar(exr);
-    std::fs::write(&p, format!("samples={}\nseed={}\nalgo={}\n", info.samples, info.seed, info.algo)).map_err(|source| CliError::Io { path: p, source })
+    std::fs::write(
+        &p,
+        format!(
+            "samples={}\nseed={}\nalgo={}\n",
+            info.samples, info.seed, info.algo
+        ),
+    )
+    .map_err(|source| CliError::Io { path: p, source })
 }
 
 /// Read the sidecar of `exr`.
 pub fn read_info(exr: &Path) -> Result<ShardInfo, CliError> {
     let p = sidecar(exr);
-    let text = std::fs::read_to_string(&p).map_err(|source| CliError::Io { path: p.clone(), source })?;
-    let mut info = ShardInfo { samples: f64::NAN, seed: 0, algo: String::new() };
+    let text = std::fs::read_to_string(&p).map_err(|source| CliError::Io {
+        path: p.clone(),
+        source,
+    })?;
+    let mut info = ShardInfo {
+        samples: f64::NAN,
+        seed: 0,
+        algo: String::new(),
+    };
     for (i, line) in text.lines().enumerate() {
-        let Some((k, v)) = line.split_once('=') else { continue };
-        let bad = || CliError::Usage(format!("{}:{}: bad value {v:?} for {k}", p.display(), i + 1));
+        let Some((k, v)) = line.split_once('=') else {
+            continue;
+        };
+        let bad = || {
+            CliError::Usage(format!(
+                "{}:{}: bad value {v:?} for {k}",
+                p.display(),
+                i + 1
+            ))
+        };
         match k.trim() {
             "samples" => info.samples = v.trim().parse().map_err(|_| bad())?,
             "seed" => info.seed = v.trim().parse().map_err(|_| bad())?,
@@ -47,7 +69,10 @@ pub fn read_info(exr: &Path) -> Result<ShardInfo, CliError> {
         }
     }
     if !(info.samples.is_finite() && info.samples > 0.0) {
-        return Err(CliError::Usage(format!("{}: no positive sample count", p.display())));
+        return Err(CliError::Usage(format!(
+            "{}: no positive sample count",
+            p.display()
+        )));
     }
     Ok(info)
 }
@@ -75,15 +100,32 @@ pub fn run(a: MergeArgs) -> Result<(), CliError> {
         let info = read_info(s)?;
         let img = read_image(s)?;
         if seeds.contains(&info.seed) {
-            return Err(CliError::Usage(format!("{}: seed {} was already used by another shard — the shards would be correlated; render shards with different --seed values", s.display(), info.seed)));
+            return Err(CliError::Usage(format!(
+                "{}: seed {} was already used by another shard — the shards would be correlated; render shards with different --seed values",
+                s.display(),
+                info.seed
+            )));
         }
         seeds.push(info.seed);
         algos.push(info.algo.clone());
         match &mut acc {
-            None => acc = Some(Image { width: img.width, height: img.height, pixels: img.pixels.iter().map(|&p| p * info.samples).collect() }),
+            None => {
+                acc = Some(Image {
+                    width: img.width,
+                    height: img.height,
+                    pixels: img.pixels.iter().map(|&p| p * info.samples).collect(),
+                })
+            }
             Some(m) => {
                 if (m.width, m.height) != (img.width, img.height) {
-                    return Err(CliError::Usage(format!("{} is {}×{}, the first shard {}×{}", s.display(), img.width, img.height, m.width, m.height)));
+                    return Err(CliError::Usage(format!(
+                        "{} is {}×{}, the first shard {}×{}",
+                        s.display(),
+                        img.width,
+                        img.height,
+                        m.width,
+                        m.height
+                    )));
                 }
                 for (q, p) in m.pixels.iter_mut().zip(&img.pixels) {
                     *q += *p * info.samples;
@@ -92,19 +134,39 @@ pub fn run(a: MergeArgs) -> Result<(), CliError> {
         }
         total += info.samples;
     }
-    let Some(mut merged) = acc else { return Err(CliError::Usage("no shards".into())) };
+    let Some(mut merged) = acc else {
+        return Err(CliError::Usage("no shards".into()));
+    };
     for p in &mut merged.pixels {
         *p = *p / total;
     }
     if algos.iter().any(|x| x != &algos[0]) {
-        eprintln!("note: shards come from different algorithms ({}); all are unbiased estimates, so the weighted mean is still correct", algos.join(", "));
+        eprintln!(
+            "note: shards come from different algorithms ({}); all are unbiased estimates, so the weighted mean is still correct",
+            algos.join(", ")
+        );
     }
     if let Some(d) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(d).map_err(|source| CliError::Io { path: d.to_path_buf(), source })?;
+        std::fs::create_dir_all(d).map_err(|source| CliError::Io {
+            path: d.to_path_buf(),
+            source,
+        })?;
     }
     write_exr(&merged, &a.output)?;
     write_png(&merged, a.exposure, &a.output.with_extension("png"))?;
-    write_info(&a.output, &ShardInfo { samples: total, seed: seeds[0], algo: algos[0].clone() })?;
-    println!("merged {} shards ({} samples per pixel in all) into {}", a.shards.len(), total, a.output.display());
+    write_info(
+        &a.output,
+        &ShardInfo {
+            samples: total,
+            seed: seeds[0],
+            algo: algos[0].clone(),
+        },
+    )?;
+    println!(
+        "merged {} shards ({} samples per pixel in all) into {}",
+        a.shards.len(),
+        total,
+        a.output.display()
+    );
     Ok(())
 }

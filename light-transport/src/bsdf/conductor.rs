@@ -11,7 +11,7 @@
 //! density integrates to the probability of success.
 
 use super::fresnel::Fresnel;
-use super::lobes::{LobeSample, to_upper};
+use super::lobes::{LobeSample, positive, to_upper};
 use super::microfacet::Ggx;
 use crate::math::{DVec3, reflect};
 use crate::spectrum::Rgb;
@@ -29,7 +29,7 @@ pub struct MicrofacetReflection {
 
 /// Half vector of a reflection pair already in the upper hemisphere.
 fn half(wo: DVec3, wi: DVec3) -> Option<DVec3> {
-    if !(wo.z > 0.0 && wi.z > 0.0) {
+    if !(positive(wo.z) && positive(wi.z)) {
         return None;
     }
     let h = wo + wi;
@@ -67,7 +67,7 @@ impl MicrofacetReflection {
         let (wo, _) = to_upper(wo, DVec3::ZERO);
         let m = self.ggx.sample_visible(wo, u)?;
         let wi = reflect(wo, m);
-        if !(wi.z > 0.0) {
+        if !positive(wi.z) {
             return None;
         }
         let wi = if flip {

@@ -16,7 +16,7 @@
 
 use super::TransportMode;
 use super::fresnel::{dielectric, refract};
-use super::lobes::{LobeSample, same_direction, uniform_in};
+use super::lobes::{LobeSample, positive, same_direction, uniform_in};
 use super::mirror::mirror_z;
 use crate::math::DVec3;
 use crate::spectrum::Rgb;
@@ -70,7 +70,7 @@ struct Branch {
 impl SmoothDielectric {
     /// Both branches for an oriented `wo` (`wo.z > 0`).
     fn branches(&self, wo: DVec3, eta: f64, mode: TransportMode) -> [Option<Branch>; 2] {
-        if !(wo.z > 0.0) {
+        if !positive(wo.z) {
             return [None, None];
         }
         let f = dielectric(wo.z, eta);

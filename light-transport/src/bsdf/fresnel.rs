@@ -2,6 +2,7 @@
 //! (complex index `η + ik`, per RGB channel), from the Fresnel equations for unpolarised light
 //! (pbrt-v4 §9.3, `FrDielectric` / `FrComplex`), and the refraction of a direction (Snell's law).
 
+use super::lobes::positive;
 use crate::math::DVec3;
 use crate::spectrum::Rgb;
 
@@ -13,7 +14,7 @@ use crate::spectrum::Rgb;
 pub fn dielectric(cos_i: f64, eta: f64) -> f64 {
     let cos_i = cos_i.clamp(0.0, 1.0);
     let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if !(sin2_t < 1.0) {
+    if sin2_t >= 1.0 || sin2_t.is_nan() {
         return 1.0;
     }
     let cos_t = (1.0 - sin2_t).sqrt();
@@ -143,13 +144,13 @@ pub fn refract(wi: DVec3, n: DVec3, eta: f64) -> Option<DVec3> {
     let cos_i = wi.dot(n);
     let sin2_i = (1.0 - cos_i * cos_i).max(0.0);
     let sin2_t = sin2_i / (eta * eta);
-    if !(sin2_t < 1.0) {
+    if sin2_t >= 1.0 || sin2_t.is_nan() {
         return None;
     }
     let cos_t = (1.0 - sin2_t).sqrt();
     let wt = -wi / eta + n * (cos_i / eta - cos_t);
     let len2 = wt.length_squared();
-    if !(len2 > 0.0) || !len2.is_finite() {
+    if !positive(len2) || !len2.is_finite() {
         return None;
     }
     Some(wt / len2.sqrt())

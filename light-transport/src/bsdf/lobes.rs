@@ -62,6 +62,18 @@ impl LobeSample {
     }
 }
 
+/// `x > 0` (false for NaN): the guard used before dividing by a density or a cosine.
+#[inline]
+pub fn positive(x: f64) -> bool {
+    x > 0.0
+}
+
+/// `x < 0` (false for NaN).
+#[inline]
+pub fn negative(x: f64) -> bool {
+    x < 0.0
+}
+
 /// Whether two local directions are strictly on the same side of the surface.
 #[inline]
 pub fn same_side(a: DVec3, b: DVec3) -> bool {
@@ -263,14 +275,12 @@ impl Lobes {
         Some(self.groups - 1)
     }
 
-    /// Add a lobe; `Err(())` when the list is full.
-    pub fn push(&mut self, lobe: Lobe) -> Result<(), ()> {
-        if self.len == MAX_LOBES {
-            return Err(());
-        }
-        self.items[self.len] = lobe;
+    /// Add a lobe; `None` when the list is full.
+    pub fn push(&mut self, lobe: Lobe) -> Option<()> {
+        let slot = self.items.get_mut(self.len)?;
+        *slot = lobe;
         self.len += 1;
-        Ok(())
+        Some(())
     }
 
     /// Renormalise group probabilities over the groups that hold lobes.
@@ -279,16 +289,15 @@ impl Lobes {
         for l in self.as_slice() {
             used[l.group] = true;
         }
-        let total: f64 = (0..self.groups)
-            .filter(|&g| used[g])
-            .map(|g| self.group_prob[g])
+        let groups = &mut self.group_prob[..self.groups];
+        let total: f64 = groups
+            .iter()
+            .zip(used)
+            .filter(|(_, u)| *u)
+            .map(|(p, _)| *p)
             .sum();
-        for g in 0..self.groups {
-            self.group_prob[g] = if used[g] && total > 0.0 {
-                self.group_prob[g] / total
-            } else {
-                0.0
-            };
+        for (p, u) in groups.iter_mut().zip(used) {
+            *p = if u && total > 0.0 { *p / total } else { 0.0 };
         }
     }
 

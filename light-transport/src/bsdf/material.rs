@@ -103,7 +103,7 @@ impl<'a> Builder<'a> {
         let group = self.lobes.new_group(prob).ok_or_else(|| self.full())?;
         for l in lobes.iter().flatten() {
             let lobe = Lobe { group, ..*l };
-            self.lobes.push(lobe).map_err(|()| self.full())?;
+            self.lobes.push(lobe).ok_or_else(|| self.full())?;
         }
         Ok(())
     }

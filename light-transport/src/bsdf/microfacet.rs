@@ -23,6 +23,7 @@
 //! `m_h = normalize(m.x/α_x, m.y/α_y, m.z)`, `p1 = m_h·T1`, `p2 = (m_h·T2 − (1 − s)√(1 − p1²))/s`,
 //! `u0 = atan2(p2, p1)/2π mod 1`, `u1 = p1² + p2²`.
 
+use super::lobes::positive;
 use crate::math::{DVec3, clamp_unit};
 use std::f64::consts::PI;
 
@@ -50,7 +51,7 @@ impl Ggx {
 
     /// The normal distribution `D(m)` (zero for `m.z ≤ 0`), `m` a unit vector.
     pub fn d(&self, m: DVec3) -> f64 {
-        if !(m.z > 0.0) {
+        if !positive(m.z) {
             return 0.0;
         }
         let x = m.x / self.alpha_x;
@@ -82,11 +83,11 @@ impl Ggx {
 
     /// Visible-normal density `D_wo(m) = G1(wo) max(0, wo·m) D(m) / wo.z` for `wo.z > 0`.
     pub fn visible_pdf(&self, wo: DVec3, m: DVec3) -> f64 {
-        if !(wo.z > 0.0) {
+        if !positive(wo.z) {
             return 0.0;
         }
         let c = wo.dot(m);
-        if !(c > 0.0) {
+        if !positive(c) {
             return 0.0;
         }
         let p = self.g1(wo) * c * self.d(m) / wo.z;
@@ -109,7 +110,7 @@ impl Ggx {
     /// Sample a visible normal for `wo` (`wo.z > 0`) from `u = (u0, u1)`; `None` when the sample
     /// degenerates to a horizontal normal (a set of measure zero).
     pub fn sample_visible(&self, wo: DVec3, u: [f64; 2]) -> Option<DVec3> {
-        if !(wo.z > 0.0) {
+        if !positive(wo.z) {
             return None;
         }
         let (v, t1, t2) = self.basis(wo);
@@ -123,7 +124,7 @@ impl Ggx {
         let mh = t1 * p1 + t2 * p2 + v * lift;
         let m = DVec3::new(self.alpha_x * mh.x, self.alpha_y * mh.y, mh.z.max(0.0));
         let len2 = m.length_squared();
-        if !(len2 > 0.0) || !len2.is_finite() {
+        if !positive(len2) || !len2.is_finite() {
             return None;
         }
         let m = m / len2.sqrt();
@@ -133,13 +134,13 @@ impl Ggx {
     /// The exact inverse of [`Ggx::sample_visible`]: the numbers `(u0, u1)` that produce the
     /// visible normal `m`; `None` when `m` is not visible from `wo` (`m.z ≤ 0` or `wo·m ≤ 0`).
     pub fn invert_visible(&self, wo: DVec3, m: DVec3) -> Option<[f64; 2]> {
-        if !(wo.z > 0.0) || !(m.z > 0.0) || !(wo.dot(m) > 0.0) {
+        if !positive(wo.z) || !positive(m.z) || !positive(wo.dot(m)) {
             return None;
         }
         let (v, t1, t2) = self.basis(wo);
         let mh = DVec3::new(m.x / self.alpha_x, m.y / self.alpha_y, m.z);
         let len2 = mh.length_squared();
-        if !(len2 > 0.0) || !len2.is_finite() {
+        if !positive(len2) || !len2.is_finite() {
             return None;
         }
         let mh = mh / len2.sqrt();

@@ -63,7 +63,7 @@ pub mod texture;
 use crate::math::{DVec3, Frame};
 use crate::scene::{MaterialDesc, TextureDesc};
 use crate::spectrum::Rgb;
-use lobes::{LobeKind, Lobes, MAX_LOBES};
+use lobes::{LobeKind, Lobes, MAX_LOBES, positive};
 use mcmc_core::ChainRng;
 use mcmc_core::rng::uniform;
 
@@ -200,7 +200,7 @@ impl Bsdf {
             let t = self.lobes.pdf_terms(&p, wo, wl);
             (self.lobes.eval(wo, wl, mode), t.iter().sum())
         };
-        if !(pdf > 0.0) || !pdf.is_finite() || !f.is_finite() {
+        if !positive(pdf) || !pdf.is_finite() || !f.is_finite() {
             return None;
         }
         Some(BsdfSample {
@@ -288,7 +288,7 @@ impl Bsdf {
             return None;
         }
         let p = self.lobes.probabilities(wo);
-        if !(p[lobe] > 0.0) {
+        if !positive(p[lobe]) {
             return None;
         }
         let [u_sub, u0, u1] = self.lobes.invert(lobe, wo, wi, rng)?;
@@ -305,7 +305,7 @@ impl Bsdf {
     ) -> Option<[f64; 3]> {
         let w = self.lobe_weights(wo, wi, delta);
         let total = w.total();
-        if !(total > 0.0) || !total.is_finite() {
+        if !positive(total) || !total.is_finite() {
             return None;
         }
         let target = uniform(rng) * total;
@@ -395,7 +395,7 @@ impl Bsdf {
         let m = if lobes::same_side(lo, li) {
             let h = lo + li;
             let len2 = h.length_squared();
-            if !(len2 > 0.0 && len2.is_finite()) {
+            if !(positive(len2) && len2.is_finite()) {
                 return None;
             }
             h / len2.sqrt()

@@ -20,7 +20,7 @@
 use super::TransportMode;
 use super::dielectric::{orient, reflect_probability, transmission_scale};
 use super::fresnel::{dielectric, refract};
-use super::lobes::{LobeSample, uniform_in};
+use super::lobes::{LobeSample, negative, positive, uniform_in};
 use super::microfacet::Ggx;
 use crate::math::{DVec3, reflect};
 use crate::spectrum::Rgb;
@@ -52,7 +52,7 @@ fn normalized(v: DVec3) -> Option<DVec3> {
 
 /// Classify `(wo, wi)` (oriented, `wo.z > 0`) and find its microfacet normal.
 fn pair(wo: DVec3, wi: DVec3, eta: f64) -> Option<Pair> {
-    if !(wo.z > 0.0) || wi.z == 0.0 || !wi.z.is_finite() {
+    if !positive(wo.z) || wi.z == 0.0 || !wi.z.is_finite() {
         return None;
     }
     if wi.z > 0.0 {
@@ -134,19 +134,19 @@ impl RoughDielectric {
         let (wo, sign, eta) = orient(wo, self.eta);
         let m = self.ggx.sample_visible(wo, u)?;
         let cos = wo.dot(m);
-        if !(cos > 0.0) {
+        if !positive(cos) {
             return None;
         }
         let (_, pr) = self.p_reflect(cos, eta)?;
         let wi = if u_sub < pr {
             let wi = reflect(wo, m);
-            if !(wi.z > 0.0) {
+            if !positive(wi.z) {
                 return None;
             }
             wi
         } else {
             let wi = refract(wo, m, eta)?;
-            if !(wi.z < 0.0) {
+            if !negative(wi.z) {
                 return None;
             }
             wi
@@ -165,12 +165,12 @@ impl RoughDielectric {
         let [u0, u1] = self.ggx.invert_visible(wo, m)?;
         let (_, pr) = self.p_reflect(wo.dot(m), eta)?;
         let u_sub = if reflection {
-            if !(pr > 0.0) {
+            if !positive(pr) {
                 return None;
             }
             uniform_in(0.0, pr, rng)
         } else {
-            if !(pr < 1.0) {
+            if pr >= 1.0 || pr.is_nan() {
                 return None;
             }
             uniform_in(pr, 1.0, rng)

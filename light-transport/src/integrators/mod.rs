@@ -82,6 +82,9 @@ pub struct RenderStats {
 }
 
 const CHUNKS: usize = 64;
+
+/// What a chunk of a pass produces: pixel estimates, splats, rays traced.
+type ChunkResult = (Vec<(usize, Rgb)>, Vec<Splat>, u64);
 const PASS_PURPOSE: u64 = 0x5eed_0001;
 
 /// Render `estimator` into a film within `budget`; `progress` is called after every pass and may
@@ -105,7 +108,7 @@ pub fn render<E: Estimator>(
     let chunk = npix.div_ceil(CHUNKS);
     loop {
         let pass = stats.passes;
-        let results: Vec<(Vec<(usize, Rgb)>, Vec<Splat>, u64)> = (0..CHUNKS)
+        let results: Vec<ChunkResult> = (0..CHUNKS)
             .into_par_iter()
             .map(|c| {
                 crate::accel::take_ray_count();
