@@ -34,18 +34,34 @@ impl Primitive {
         }
     }
 
+    /// Ray parameter and barycentrics (unused for spheres) of the nearest hit before `t_max`.
     #[inline]
-    fn intersect(&self, o: DVec3, d: DVec3, t_max: f64, index: u32) -> Option<Hit> {
+    fn intersect_t(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64, f64)> {
         match self {
-            Primitive::Triangle(t) => t.intersect(o, d, t_max).map(|(th, b1, b2)| Hit {
-                t: th,
-                point: t.point(b1, b2, index),
-            }),
-            Primitive::Sphere(s) => s.intersect(o, d, t_max).map(|th| Hit {
-                t: th,
-                point: s.point(o + d * th, index),
-            }),
+            Primitive::Triangle(t) => t.intersect(o, d, t_max),
+            Primitive::Sphere(s) => s.intersect(o, d, t_max).map(|th| (th, 0.0, 0.0)),
         }
+    }
+
+    /// The surface point of a hit found by [`Primitive::intersect_t`].
+    #[inline]
+    fn hit_point(&self, o: DVec3, d: DVec3, (t, b1, b2): (f64, f64, f64), index: u32) -> Hit {
+        match self {
+            Primitive::Triangle(tri) => Hit {
+                t,
+                point: tri.point(b1, b2, index),
+            },
+            Primitive::Sphere(s) => Hit {
+                t,
+                point: s.point(o + d * t, index),
+            },
+        }
+    }
+
+    #[cfg(test)]
+    fn intersect(&self, o: DVec3, d: DVec3, t_max: f64, index: u32) -> Option<Hit> {
+        self.intersect_t(o, d, t_max)
+            .map(|h| self.hit_point(o, d, h, index))
     }
 
     #[inline]
@@ -127,24 +143,24 @@ impl Bvh {
         if self.primitives.is_empty() {
             return None;
         }
-        let mut best: Option<Hit> = None;
+        let mut best: Option<((f64, f64, f64), u32)> = None;
         let mut best_t = t_max;
         let mut rh = RayHit::none();
         self.bvh
             .ray_traverse(Self::bvh_ray(o, d, t_max), &mut rh, |_, id| {
                 let index = self.bvh.primitive_indices[id];
-                match self.primitives[index as usize].intersect(o, d, best_t, index) {
+                match self.primitives[index as usize].intersect_t(o, d, best_t) {
                     Some(h) => {
-                        best_t = h.t;
-                        best = Some(h);
+                        best_t = h.0;
+                        best = Some((h, index));
                         // Report a slightly larger f32 distance so traversal never culls a box whose
                         // f32 entry distance rounds above the f64 hit.
-                        (h.t * (1.0 + 1e-6)) as f32
+                        (h.0 * (1.0 + 1e-6)) as f32
                     }
                     None => f32::INFINITY,
                 }
             });
-        best
+        best.map(|(h, index)| self.primitives[index as usize].hit_point(o, d, h, index))
     }
 
     /// Whether anything blocks the open segment `o + t d`, `t ∈ (0, t_max)`.

@@ -19,13 +19,6 @@ pub enum MisHeuristic {
     Power,
 }
 
-#[derive(Clone, Copy)]
-pub(crate) struct Densities {
-    fwd: f64,
-    rev: f64,
-    delta: bool,
-}
-
 #[inline]
 fn remap(p: f64) -> f64 {
     if p != 0.0 { p } else { 1.0 }
@@ -49,51 +42,51 @@ pub fn mis_weight(
         MisHeuristic::Balance => r,
         MisHeuristic::Power => r * r,
     };
-    // Copy the densities of the path's vertices (small stack buffers; paths are short).
-    let mut cam: smallvec_like::Buf = smallvec_like::Buf::new();
-    let mut lit: smallvec_like::Buf = smallvec_like::Buf::new();
-    for v in &camera[..t] {
-        cam.push(Densities {
-            fwd: v.pdf_fwd,
-            rev: v.pdf_rev,
-            delta: v.delta,
-        });
-    }
-    for v in &light[..s] {
-        lit.push(Densities {
-            fwd: v.pdf_fwd,
-            rev: v.pdf_rev,
-            delta: v.delta,
-        });
-    }
     let pt = &camera[t - 1];
     let pt_minus = if t > 1 { Some(&camera[t - 2]) } else { None };
     let qs = if s > 0 { Some(&light[s - 1]) } else { None };
     let qs_minus = if s > 1 { Some(&light[s - 2]) } else { None };
-    // Reverse densities at the connection.
-    cam[t - 1].rev = match qs {
+    // Reverse densities at the connection (the other vertices keep the walks' values).
+    let pt_rev = match qs {
         Some(q) => q.pdf(scene, qs_minus, pt),
         None => pt.pdf_light_origin(scene),
     };
-    cam[t - 1].delta = false;
-    if let Some(pm) = pt_minus {
-        cam[t - 2].rev = match qs {
-            Some(q) => pt.pdf(scene, Some(q), pm),
-            None => pt.pdf_light(scene, pm),
-        };
-    }
-    if let Some(q) = qs {
-        lit[s - 1].rev = pt.pdf(scene, pt_minus, q);
-        lit[s - 1].delta = false;
-        if let Some(qm) = qs_minus {
-            lit[s - 2].rev = q.pdf(scene, Some(pt), qm);
+    let pt_minus_rev = pt_minus.map(|pm| match qs {
+        Some(q) => pt.pdf(scene, Some(q), pm),
+        None => pt.pdf_light(scene, pm),
+    });
+    let qs_rev = qs.map(|q| pt.pdf(scene, pt_minus, q));
+    let qs_minus_rev = match (qs, qs_minus) {
+        (Some(q), Some(qm)) => Some(q.pdf(scene, Some(pt), qm)),
+        _ => None,
+    };
+    // Camera side: vertex i's reverse density (overridden at t−1, t−2) and delta flag (the
+    // connection vertex counts as non-delta).
+    let cam_rev = |i: usize| {
+        if i == t - 1 {
+            pt_rev
+        } else if i + 2 == t {
+            pt_minus_rev.unwrap_or(camera[i].pdf_rev)
+        } else {
+            camera[i].pdf_rev
         }
-    }
+    };
+    let cam_delta = |i: usize| i + 1 != t && camera[i].delta;
+    let light_rev = |i: usize| {
+        if i + 1 == s {
+            qs_rev.unwrap_or(light[i].pdf_rev)
+        } else if i + 2 == s {
+            qs_minus_rev.unwrap_or(light[i].pdf_rev)
+        } else {
+            light[i].pdf_rev
+        }
+    };
+    let light_delta = |i: usize| i + 1 != s && light[i].delta;
     let mut sum = 0.0;
     let mut ri = 1.0;
     for i in (1..t).rev() {
-        ri *= remap(cam[i].rev) / remap(cam[i].fwd);
-        if !cam[i].delta && !cam[i - 1].delta {
+        ri *= remap(cam_rev(i)) / remap(camera[i].pdf_fwd);
+        if !cam_delta(i) && !cam_delta(i - 1) {
             sum += pow(ri);
         }
     }
@@ -105,73 +98,16 @@ pub fn mis_weight(
         _ => false,
     };
     for i in (0..s).rev() {
-        ri *= remap(lit[i].rev) / remap(lit[i].fwd);
+        ri *= remap(light_rev(i)) / remap(light[i].pdf_fwd);
         let delta_before = if i > 0 {
-            lit[i - 1].delta
+            light_delta(i - 1)
         } else {
             light_is_delta
         };
-        if !lit[i].delta && !delta_before {
+        if !light_delta(i) && !delta_before {
             sum += pow(ri);
         }
     }
     let w = 1.0 / (1.0 + sum);
     if w.is_finite() { w } else { 0.0 }
-}
-
-/// A fixed-capacity buffer, falling back to the heap for very long paths.
-mod smallvec_like {
-    use super::Densities;
-
-    pub(crate) struct Buf {
-        inline: [Densities; 32],
-        len: usize,
-        heap: Vec<Densities>,
-    }
-
-    impl Buf {
-        pub fn new() -> Self {
-            Self {
-                inline: [Densities {
-                    fwd: 0.0,
-                    rev: 0.0,
-                    delta: false,
-                }; 32],
-                len: 0,
-                heap: Vec::new(),
-            }
-        }
-        pub fn push(&mut self, d: Densities) {
-            if self.len < 32 {
-                self.inline[self.len] = d;
-            } else {
-                if self.heap.is_empty() {
-                    self.heap.extend_from_slice(&self.inline);
-                }
-                self.heap.push(d);
-            }
-            self.len += 1;
-        }
-    }
-
-    impl std::ops::Index<usize> for Buf {
-        type Output = Densities;
-        fn index(&self, i: usize) -> &Densities {
-            if self.len <= 32 {
-                &self.inline[i]
-            } else {
-                &self.heap[i]
-            }
-        }
-    }
-
-    impl std::ops::IndexMut<usize> for Buf {
-        fn index_mut(&mut self, i: usize) -> &mut Densities {
-            if self.len <= 32 {
-                &mut self.inline[i]
-            } else {
-                &mut self.heap[i]
-            }
-        }
-    }
 }
