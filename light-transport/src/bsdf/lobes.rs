@@ -22,7 +22,7 @@ use mcmc_core::ChainRng;
 use mcmc_core::rng::uniform;
 
 /// Largest number of lobes of one BSDF (after flattening mixes).
-pub const MAX_LOBES: usize = 4;
+pub const MAX_LOBES: usize = 8;
 
 /// Largest angle (radians, as a chord length) between two directions that are considered the
 /// same delta direction.
