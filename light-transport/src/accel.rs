@@ -90,8 +90,11 @@ fn count_ray() {
 /// The acceleration structure with its primitives.
 pub struct Bvh {
     bvh: CwBvh,
-    /// Primitives in scene order (`bvh.primitive_indices` maps leaves to them).
+    /// Primitives in the BVH's leaf order, so traversal reads them sequentially; a primitive's
+    /// index everywhere in the renderer is its position here.
     pub primitives: Vec<Primitive>,
+    /// `original[i]`: the index primitive `i` had in the list given to [`Bvh::new`].
+    pub original: Vec<u32>,
 }
 
 fn to_f32(v: DVec3) -> Vec3A {
@@ -99,7 +102,7 @@ fn to_f32(v: DVec3) -> Vec3A {
 }
 
 impl Bvh {
-    /// Build over `primitives`.
+    /// Build over `primitives` (which are then stored in leaf order; see [`Bvh::original`]).
     pub fn new(primitives: Vec<Primitive>) -> Self {
         let aabbs: Vec<Aabb> = primitives
             .iter()
@@ -125,7 +128,13 @@ impl Bvh {
                 &mut Duration::default(),
             )
         };
-        Self { bvh, primitives }
+        let original: Vec<u32> = bvh.primitive_indices.clone();
+        let primitives = original.iter().map(|&i| primitives[i as usize]).collect();
+        Self {
+            bvh,
+            primitives,
+            original,
+        }
     }
 
     fn bvh_ray(o: DVec3, d: DVec3, t_max: f64) -> BvhRay {
@@ -148,11 +157,10 @@ impl Bvh {
         let mut rh = RayHit::none();
         self.bvh
             .ray_traverse(Self::bvh_ray(o, d, t_max), &mut rh, |_, id| {
-                let index = self.bvh.primitive_indices[id];
-                match self.primitives[index as usize].intersect_t(o, d, best_t) {
+                match self.primitives[id].intersect_t(o, d, best_t) {
                     Some(h) => {
                         best_t = h.0;
-                        best = Some((h, index));
+                        best = Some((h, id as u32));
                         // Report a slightly larger f32 distance so traversal never culls a box whose
                         // f32 entry distance rounds above the f64 hit.
                         (h.0 * (1.0 + 1e-6)) as f32
@@ -172,8 +180,7 @@ impl Bvh {
         !self
             .bvh
             .ray_traverse_miss(Self::bvh_ray(o, d, t_max), |_, id| {
-                let index = self.bvh.primitive_indices[id];
-                if self.primitives[index as usize].hits(o, d, t_max) {
+                if self.primitives[id].hits(o, d, t_max) {
                     0.0
                 } else {
                     f32::INFINITY
@@ -237,7 +244,7 @@ mod tests {
             match (brute, fast) {
                 (None, None) => {}
                 (Some(a), Some(b)) => {
-                    assert_eq!(a.point.primitive, b.point.primitive);
+                    assert_eq!(a.point.primitive, bvh.original[b.point.primitive as usize]);
                     assert!((a.t - b.t).abs() < 1e-12);
                     assert!(bvh.occluded(o, d, a.t * 1.0001));
                     assert!(!bvh.occluded(o, d, a.t * 0.9999));

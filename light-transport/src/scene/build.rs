@@ -165,6 +165,20 @@ impl Scene {
             }
         }
         let bvh = Bvh::new(prims);
+        // The BVH stores primitives in its leaf order: carry the per-primitive tables over.
+        let mut new_index = vec![0u32; bvh.original.len()];
+        for (new, &old) in bvh.original.iter().enumerate() {
+            new_index[old as usize] = new as u32;
+        }
+        let prim_mat: Vec<u32> = bvh
+            .original
+            .iter()
+            .map(|&old| prim_mat[old as usize])
+            .collect();
+        let emissive: Vec<(u32, AreaLightDesc)> = emissive
+            .into_iter()
+            .map(|(old, al)| (new_index[old as usize], al))
+            .collect();
         let bounds = if bvh.primitives.is_empty() {
             (DVec3::ZERO, DVec3::ZERO)
         } else {
