@@ -15,6 +15,9 @@ pub struct DiffArgs {
     /// Write the relative-error image here (PNG; yellow = `--scale`).
     #[arg(long)]
     pub error_image: Option<PathBuf>,
+    /// Box-filter the reference down to the image's size when it is an integer multiple of it.
+    #[arg(long)]
+    pub fit: bool,
     /// Relative error at the top of the colour ramp.
     #[arg(long, default_value_t = 0.5)]
     pub scale: f64,
@@ -22,7 +25,14 @@ pub struct DiffArgs {
 
 pub fn run(a: DiffArgs) -> Result<(), CliError> {
     let img = read_image(&a.image)?;
-    let reference = read_image(&a.reference)?;
+    let mut reference = read_image(&a.reference)?;
+    if a.fit && (reference.width, reference.height) != (img.width, img.height) {
+        let k = reference.width / img.width.max(1);
+        reference = reference.downsample(k).filter(|r| (r.width, r.height) == (img.width, img.height)).ok_or_else(|| {
+            CliError::Usage(format!("--fit: the reference ({}×{}) is not an integer multiple of the image ({}×{})", reference.width, reference.height, img.width, img.height))
+        })?;
+        println!("reference box-filtered by {k} to {}×{}", img.width, img.height);
+    }
     let m = metrics(&img, &reference)?;
     let (mi, mr) = (img.mean(), reference.mean());
     println!(

@@ -134,6 +134,24 @@ impl Image {
         }
     }
 
+    /// Box-filter down by an integer factor `k` (each output pixel averages a `k×k` block, which
+    /// is exactly a pixel-area average at the lower resolution). `None` unless `k` divides both
+    /// dimensions.
+    pub fn downsample(&self, k: usize) -> Option<Image> {
+        if k == 0 || self.width % k != 0 || self.height % k != 0 {
+            return None;
+        }
+        let (w, h) = (self.width / k, self.height / k);
+        let mut pixels = vec![Rgb::BLACK; w * h];
+        for y in 0..self.height {
+            for x in 0..self.width {
+                pixels[(y / k) * w + x / k] += self.pixels[y * self.width + x];
+            }
+        }
+        let n = (k * k) as f64;
+        Some(Image { width: w, height: h, pixels: pixels.into_iter().map(|p| p / n).collect() })
+    }
+
     /// Average of all pixels.
     pub fn mean(&self) -> Rgb {
         let n = self.pixels.len().max(1) as f64;
