@@ -100,22 +100,7 @@ pub fn write_heatmaps(
     Ok(path)
 }
 
-/// A viridis-like ramp from dark purple (0) through teal to yellow (1).
+/// The renderer's perceptual false-colour ramp (dark purple → teal → yellow) as an image pixel.
 pub fn colour(t: f64) -> Rgb<u8> {
-    const RAMP: [[f64; 3]; 9] = [
-        [68.0, 1.0, 84.0],
-        [71.0, 44.0, 122.0],
-        [59.0, 81.0, 139.0],
-        [44.0, 113.0, 142.0],
-        [33.0, 144.0, 141.0],
-        [39.0, 173.0, 129.0],
-        [92.0, 200.0, 99.0],
-        [170.0, 220.0, 50.0],
-        [253.0, 231.0, 37.0],
-    ];
-    let s = t.clamp(0.0, 1.0) * (RAMP.len() - 1) as f64;
-    let k = (s.floor() as usize).min(RAMP.len() - 2);
-    let f = s - k as f64;
-    let c = |n: usize| (RAMP[k][n] + f * (RAMP[k + 1][n] - RAMP[k][n])).round() as u8;
-    Rgb([c(0), c(1), c(2)])
+    Rgb(light_transport::film::false_colour(t))
 }

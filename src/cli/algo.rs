@@ -26,6 +26,33 @@ impl Algo {
     }
 }
 
+/// Options every rendering command shares.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RenderOptions {
+    /// Master seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Maximum number of bounces (pbrt's maxdepth; paths have at most maxdepth + 1 edges).
+    #[arg(long, default_value_t = 8)]
+    pub max_depth: usize,
+    /// Override the image size, e.g. 320x240.
+    #[arg(long, value_parser = super::scene_arg::parse_resolution)]
+    pub resolution: Option<(usize, usize)>,
+    /// PNG exposure in stops.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f64,
+    /// MIS heuristic.
+    #[arg(long, value_enum, default_value_t = super::render::Heuristic::Power)]
+    pub mis: super::render::Heuristic,
+}
+
+impl RenderOptions {
+    /// The integrator options they imply.
+    pub fn common(&self) -> Common {
+        Common { max_edges: self.max_depth + 1, heuristic: self.mis.into() }
+    }
+}
+
 /// Options shared by the unbiased integrators.
 #[derive(Clone, Copy, Debug)]
 pub struct Common {

@@ -3,11 +3,11 @@
 //! final images with their error images, and one side-by-side PNG.
 
 use super::CliError;
-use super::algo::{self, Algo, Common};
+use super::algo::{self, Algo, RenderOptions};
 use super::duration::parse_duration;
 use super::plot::{Series, error_plot};
-use super::render::{Heuristic, write_outputs};
-use super::scene_arg::{self, parse_resolution};
+use super::render::write_outputs;
+use super::scene_arg;
 use clap::Args;
 use light_transport::film::{Image, error_image, metrics, read_image, write_bytes_png};
 use light_transport::integrators::{Budget, Estimator, render};
@@ -33,24 +33,12 @@ pub struct CompareArgs {
     /// Number of checkpoints.
     #[arg(long, default_value_t = 5)]
     pub checkpoints: usize,
+    /// Seed, depth, resolution, exposure, MIS.
+    #[command(flatten)]
+    pub options: RenderOptions,
     /// Output folder. Default: `out/compare-<scene>`.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
-    /// Maximum number of bounces.
-    #[arg(long, default_value_t = 8)]
-    pub max_depth: usize,
-    /// Override the image size.
-    #[arg(long, value_parser = parse_resolution)]
-    pub resolution: Option<(usize, usize)>,
-    /// Master seed.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// PNG exposure in stops.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub exposure: f64,
-    /// MIS heuristic.
-    #[arg(long, value_enum, default_value_t = Heuristic::Power)]
-    pub mis: Heuristic,
 }
 
 /// One checkpoint of one algorithm.
@@ -76,7 +64,7 @@ fn track<E: Estimator>(
         .collect();
     let mut next = 0;
     let mut err: Option<CliError> = None;
-    let (film, stats) = render(scene, est, Budget::Time(a.time), a.seed, |film, p| {
+    let (film, stats) = render(scene, est, Budget::Time(a.time), a.options.seed, |film, p| {
         while next < marks.len() && p.elapsed >= marks[next] {
             match metrics(&Image::from_film(film), reference) {
                 Ok(m) => rows.push(Row {
@@ -113,7 +101,7 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
         ));
     }
     let loaded = scene_arg::load(&a.scene)?;
-    let (scene, _) = scene_arg::build(&loaded, a.resolution)?;
+    let (scene, _) = scene_arg::build(&loaded, a.options.resolution)?;
     let dir = a
         .output
         .clone()
@@ -122,10 +110,7 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
         path: dir.clone(),
         source,
     })?;
-    let common = Common {
-        max_edges: a.max_depth + 1,
-        heuristic: a.mis.into(),
-    };
+    let common = a.options.common();
     let reference = match &a.reference {
         Some(p) => read_image(p)?,
         None => {
@@ -138,7 +123,7 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
                 &scene,
                 &algo::bdpt(&common),
                 Budget::Time(t),
-                a.seed ^ 0xABCD,
+                a.options.seed ^ 0xABCD,
                 |_, _| true,
             );
             let img = Image::from_film(&film);
@@ -146,7 +131,7 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
                 &img,
                 &dir.join("reference.exr"),
                 &dir.join("reference.png"),
-                a.exposure,
+                a.options.exposure,
             )?;
             img
         }
@@ -200,7 +185,7 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
             &img,
             &dir.join(format!("{}.exr", algo.name())),
             &dir.join(format!("{}.png", algo.name())),
-            a.exposure,
+            a.options.exposure,
         )?;
         finals.push((algo.name(), img));
     }
@@ -246,10 +231,10 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
     )
     .map_err(CliError::Usage)?;
     // Side by side: reference | each algorithm, and the error images underneath.
-    let mut tiles: Vec<Vec<[u8; 3]>> = vec![to_srgb(&reference, a.exposure)];
+    let mut tiles: Vec<Vec<[u8; 3]>> = vec![to_srgb(&reference, a.options.exposure)];
     let mut errs: Vec<Vec<[u8; 3]>> = vec![error_image(&reference, &reference, 1.0)?];
     for (_, img) in &finals {
-        tiles.push(to_srgb(img, a.exposure));
+        tiles.push(to_srgb(img, a.options.exposure));
         errs.push(error_image(img, &reference, 0.5)?);
     }
     tiles.extend(errs);

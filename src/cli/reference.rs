@@ -1,10 +1,9 @@
 //! `charted reference`: a long unbiased render to compare against (BDPT by default).
 
 use super::CliError;
-use super::algo::Algo;
+use super::algo::{Algo, RenderOptions};
 use super::duration::parse_duration;
-use super::render::{self, Heuristic, RenderArgs};
-use super::scene_arg::parse_resolution;
+use super::render::{self, RenderArgs};
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -24,21 +23,20 @@ pub struct ReferenceArgs {
     /// Wall-clock budget.
     #[arg(long, value_parser = parse_duration)]
     pub time: Option<Duration>,
+    /// Seed, depth, resolution, exposure, MIS.
+    #[command(flatten)]
+    pub options: RenderOptions,
     /// Output. Default: `out/<scene>-reference.exr`.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
-    /// Maximum number of bounces.
-    #[arg(long, default_value_t = 8)]
-    pub max_depth: usize,
-    /// Override the image size.
-    #[arg(long, value_parser = parse_resolution)]
-    pub resolution: Option<(usize, usize)>,
-    /// Master seed.
-    #[arg(long, default_value_t = 7)]
-    pub seed: u64,
 }
 
-pub fn run(a: ReferenceArgs) -> Result<(), CliError> {
+/// References use seed `S ^ REFERENCE_SEED` so that a reference never replays a render made with
+/// the same `--seed` (which would show zero error).
+pub const REFERENCE_SEED: u64 = 0x5eed_0f_4ef0;
+
+pub fn run(mut a: ReferenceArgs) -> Result<(), CliError> {
+    a.options.seed ^= REFERENCE_SEED;
     let name = super::scene_arg::load(&a.scene)?.name;
     render::run(RenderArgs {
         output: Some(
@@ -53,11 +51,7 @@ pub fn run(a: ReferenceArgs) -> Result<(), CliError> {
         time: a.time,
         scene: a.scene,
         algo: a.algo,
-        seed: a.seed,
-        max_depth: a.max_depth,
-        resolution: a.resolution,
-        exposure: 0.0,
-        mis: Heuristic::Power,
+        options: a.options,
         write_every: Duration::from_secs(60),
         threads: None,
         quiet: false,

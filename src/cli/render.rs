@@ -2,9 +2,9 @@
 //! the current image, and a summary.
 
 use super::CliError;
-use super::algo::{self, Algo, Common};
+use super::algo::{self, Algo, RenderOptions};
 use super::duration::parse_duration;
-use super::scene_arg::{self, parse_resolution};
+use super::scene_arg;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use light_transport::film::{Film, Image, write_exr, write_png};
@@ -29,28 +29,16 @@ pub struct RenderArgs {
     /// Wall-clock budget, e.g. 30s, 2m, 1h.
     #[arg(long, value_parser = parse_duration)]
     pub time: Option<Duration>,
-    /// Master seed.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
     /// Output file (.exr; a .png with the same stem is written beside it). Default:
     /// `out/<scene>-<algo>.exr`.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
-    /// Maximum number of bounces (pbrt's maxdepth; paths have at most maxdepth + 1 edges).
-    #[arg(long, default_value_t = 8)]
-    pub max_depth: usize,
-    /// Override the image size, e.g. 320x240.
-    #[arg(long, value_parser = parse_resolution)]
-    pub resolution: Option<(usize, usize)>,
-    /// PNG exposure in stops.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub exposure: f64,
-    /// MIS heuristic.
-    #[arg(long, value_enum, default_value_t = Heuristic::Power)]
-    pub mis: Heuristic,
     /// Write the current image this often during long renders.
     #[arg(long, value_parser = parse_duration, default_value = "30s")]
     pub write_every: Duration,
+    /// Seed, depth, resolution, exposure, MIS.
+    #[command(flatten)]
+    pub options: RenderOptions,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -154,19 +142,16 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
         (None, None) => Budget::SamplesPerPixel(16),
     };
     let loaded = scene_arg::load(&a.scene)?;
-    let (scene, build_time) = scene_arg::build(&loaded, a.resolution)?;
+    let (scene, build_time) = scene_arg::build(&loaded, a.options.resolution)?;
     for note in &scene.notes {
         eprintln!("note: {note}");
     }
     let (exr, png) = output_paths(&a.output, &loaded.name, a.algo.name());
-    let common = Common {
-        max_edges: a.max_depth + 1,
-        heuristic: a.mis.into(),
-    };
+    let common = a.options.common();
     let mut last_write = Instant::now();
     let every = |film: &Film| {
         if last_write.elapsed() >= a.write_every {
-            let _ = write_outputs(&Image::from_film(film), &exr, &png, a.exposure);
+            let _ = write_outputs(&Image::from_film(film), &exr, &png, a.options.exposure);
             last_write = Instant::now();
         }
     };
@@ -175,7 +160,7 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
             &scene,
             &algo::path_tracer(&common),
             budget,
-            a.seed,
+            a.options.seed,
             a.quiet,
             every,
         ),
@@ -183,20 +168,20 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
             &scene,
             &algo::light_tracer(&common),
             budget,
-            a.seed,
+            a.options.seed,
             a.quiet,
             every,
         ),
-        Algo::Bdpt => run_integrator(&scene, &algo::bdpt(&common), budget, a.seed, a.quiet, every),
+        Algo::Bdpt => run_integrator(&scene, &algo::bdpt(&common), budget, a.options.seed, a.quiet, every),
     };
     let t = Instant::now();
     let img = Image::from_film(&film);
-    write_outputs(&img, &exr, &png, a.exposure)?;
+    write_outputs(&img, &exr, &png, a.options.exposure)?;
     super::shard::write_info(
         &exr,
         &super::shard::ShardInfo {
             samples: stats.passes as f64,
-            seed: a.seed,
+            seed: a.options.seed,
             algo: a.algo.name().into(),
         },
     )?;
@@ -214,8 +199,8 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
     println!(
         "algorithm  {} (max depth {}, {:?} heuristic)",
         a.algo.name(),
-        a.max_depth,
-        a.mis
+        a.options.max_depth,
+        a.options.mis
     );
     println!(
         "time       parse {:.2} s, build {:.2} s, render {:.2} s, write {:.2} s",
