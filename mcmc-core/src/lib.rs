@@ -60,6 +60,7 @@ mod ensemble;
 mod error;
 pub mod kernel;
 pub mod population;
+pub mod primary_sample;
 mod proposal;
 pub mod proposals;
 pub mod rng;

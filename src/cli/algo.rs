@@ -49,7 +49,10 @@ pub struct RenderOptions {
 impl RenderOptions {
     /// The integrator options they imply.
     pub fn common(&self) -> Common {
-        Common { max_edges: self.max_depth + 1, heuristic: self.mis.into() }
+        Common {
+            max_edges: self.max_depth + 1,
+            heuristic: self.mis.into(),
+        }
     }
 }
 

@@ -64,23 +64,29 @@ fn track<E: Estimator>(
         .collect();
     let mut next = 0;
     let mut err: Option<CliError> = None;
-    let (film, stats) = render(scene, est, Budget::Time(a.time), a.options.seed, |film, p| {
-        while next < marks.len() && p.elapsed >= marks[next] {
-            match metrics(&Image::from_film(film), reference) {
-                Ok(m) => rows.push(Row {
-                    algo: name,
-                    checkpoint: next + 1,
-                    seconds: p.elapsed.as_secs_f64(),
-                    spp: p.passes,
-                    rmse: m.rmse,
-                    rel_mse: m.rel_mse,
-                }),
-                Err(e) => err = Some(e.into()),
+    let (film, stats) = render(
+        scene,
+        est,
+        Budget::Time(a.time),
+        a.options.seed,
+        |film, p| {
+            while next < marks.len() && p.elapsed >= marks[next] {
+                match metrics(&Image::from_film(film), reference) {
+                    Ok(m) => rows.push(Row {
+                        algo: name,
+                        checkpoint: next + 1,
+                        seconds: p.elapsed.as_secs_f64(),
+                        spp: p.passes,
+                        rmse: m.rmse,
+                        rel_mse: m.rel_mse,
+                    }),
+                    Err(e) => err = Some(e.into()),
+                }
+                next += 1;
             }
-            next += 1;
-        }
-        err.is_none()
-    });
+            err.is_none()
+        },
+    );
     if let Some(e) = err {
         return Err(e);
     }

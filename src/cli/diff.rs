@@ -28,10 +28,19 @@ pub fn run(a: DiffArgs) -> Result<(), CliError> {
     let mut reference = read_image(&a.reference)?;
     if a.fit && (reference.width, reference.height) != (img.width, img.height) {
         let k = reference.width / img.width.max(1);
-        reference = reference.downsample(k).filter(|r| (r.width, r.height) == (img.width, img.height)).ok_or_else(|| {
-            CliError::Usage(format!("--fit: the reference ({}×{}) is not an integer multiple of the image ({}×{})", reference.width, reference.height, img.width, img.height))
-        })?;
-        println!("reference box-filtered by {k} to {}×{}", img.width, img.height);
+        reference = reference
+            .downsample(k)
+            .filter(|r| (r.width, r.height) == (img.width, img.height))
+            .ok_or_else(|| {
+                CliError::Usage(format!(
+                    "--fit: the reference ({}×{}) is not an integer multiple of the image ({}×{})",
+                    reference.width, reference.height, img.width, img.height
+                ))
+            })?;
+        println!(
+            "reference box-filtered by {k} to {}×{}",
+            img.width, img.height
+        );
     }
     let m = metrics(&img, &reference)?;
     let (mi, mr) = (img.mean(), reference.mean());

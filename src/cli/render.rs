@@ -172,7 +172,14 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
             a.quiet,
             every,
         ),
-        Algo::Bdpt => run_integrator(&scene, &algo::bdpt(&common), budget, a.options.seed, a.quiet, every),
+        Algo::Bdpt => run_integrator(
+            &scene,
+            &algo::bdpt(&common),
+            budget,
+            a.options.seed,
+            a.quiet,
+            every,
+        ),
     };
     let t = Instant::now();
     let img = Image::from_film(&film);

@@ -9,6 +9,7 @@
 mod broken;
 mod ensemble;
 mod finite;
+mod kelemen;
 mod properties;
 mod rates;
 mod tempering;

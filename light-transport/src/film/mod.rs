@@ -149,7 +149,11 @@ impl Image {
             }
         }
         let n = (k * k) as f64;
-        Some(Image { width: w, height: h, pixels: pixels.into_iter().map(|p| p / n).collect() })
+        Some(Image {
+            width: w,
+            height: h,
+            pixels: pixels.into_iter().map(|p| p / n).collect(),
+        })
     }
 
     /// Average of all pixels.

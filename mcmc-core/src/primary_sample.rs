@@ -1,0 +1,253 @@
+//! Primary sample space with lazily created coordinates (Kelemen, Szirmay-Kalos, Antal & Csonka
+//! 2002): the state of a chain whose target is a black box `Ψ(ξ)` reading as many uniform numbers
+//! as it needs, organised in independent streams.
+//!
+//! A proposal ([`Kelemen`]) is either a *large step* (every coordinate replaced by a fresh uniform
+//! number: an independence sampler) or a *small step* (every coordinate perturbed by a symmetric
+//! wrapped kernel, [`SmallStep`]). Coordinates are materialised only when `Ψ` reads them
+//! ([`PrimarySample::get`]): a coordinate last touched before the most recent large step is first
+//! redrawn uniformly, then brought up to date by the small steps it missed, one perturbation per
+//! missed iteration. Both moves are symmetric, and coordinates never read are marginalised out, so
+//! the acceptance ratio is `Ψ(ξ') / Ψ(ξ)`.
+//!
+//! The candidate of each proposal is a copy of the current state (cheap: a few hundred numbers);
+//! rejecting it simply drops the copy, and accepting swaps it in (no backup/restore bookkeeping).
+//! The iteration counter therefore counts *accepted* proposals, which is what the catch-up needs:
+//! a rejected proposal changed nothing.
+
+use crate::proposals::SmallStep;
+use crate::rng::uniform;
+use crate::{ChainRng, McmcError, Proposal, Proposed};
+use rand::{Rng, SeedableRng};
+
+#[derive(Clone, Debug, Default)]
+struct Stream {
+    values: Vec<f64>,
+    modified: Vec<u64>,
+}
+
+/// A point of primary sample space with lazily created coordinates in several streams.
+#[derive(Clone, Debug)]
+pub struct PrimarySample {
+    streams: Vec<Stream>,
+    /// Iteration (proposal count) this state belongs to.
+    iteration: u64,
+    /// Iteration of the most recent large step.
+    last_large: u64,
+    /// Whether the pending iteration is a large step.
+    large: bool,
+    step: SmallStep,
+    rng: ChainRng,
+}
+
+impl PrimarySample {
+    /// An empty state with `streams` streams drawing from generator seed `seed` (its coordinates
+    /// are created uniformly on first read).
+    pub fn new(streams: usize, step: SmallStep, seed: u64) -> Result<Self, McmcError> {
+        step.validate()?;
+        Ok(Self {
+            streams: vec![Stream::default(); streams.max(1)],
+            iteration: 0,
+            last_large: 0,
+            large: false,
+            step,
+            rng: ChainRng::seed_from_u64(seed),
+        })
+    }
+
+    /// A state with the given coordinates, current as of iteration 0 (e.g. a recorded vector).
+    pub fn from_values(
+        values: Vec<Vec<f64>>,
+        step: SmallStep,
+        seed: u64,
+    ) -> Result<Self, McmcError> {
+        if values.iter().flatten().any(|v| !(0.0..1.0).contains(v)) {
+            return Err(McmcError::InvalidParameter {
+                name: "values",
+                reason: "coordinates must lie in [0, 1)".into(),
+            });
+        }
+        let mut s = Self::new(values.len(), step, seed)?;
+        for (st, v) in s.streams.iter_mut().zip(values) {
+            st.modified = vec![0; v.len()];
+            st.values = v;
+        }
+        Ok(s)
+    }
+
+    /// Number of streams.
+    pub fn stream_count(&self) -> usize {
+        self.streams.len()
+    }
+
+    /// Coordinate `index` of `stream`, created or brought up to date on demand.
+    pub fn get(&mut self, stream: usize, index: usize) -> f64 {
+        let Some(st) = self.streams.get_mut(stream) else {
+            return 0.5; // out-of-range stream: callers are expected to stay within stream_count
+        };
+        if index >= st.values.len() {
+            st.values.resize(index + 1, 0.0);
+            // A coordinate that never existed is "older than any large step".
+            st.modified.resize(index + 1, u64::MAX);
+        }
+        let m = st.modified[index];
+        if m == u64::MAX {
+            // New: a uniform number is already distributed as the kernel's stationary law, so no
+            // catch-up is needed.
+            st.values[index] = uniform(&mut self.rng);
+            st.modified[index] = self.iteration;
+        } else if m < self.last_large {
+            // Replaced by the most recent (accepted or pending) large step.
+            st.values[index] = uniform(&mut self.rng);
+            st.modified[index] = self.last_large;
+        }
+        let m = st.modified[index];
+        if m < self.iteration {
+            // Small steps missed since it was last touched (the large step, if this iteration is
+            // one, was handled above by last_large == iteration).
+            for _ in m..self.iteration {
+                st.values[index] = self.step.perturb(st.values[index], &mut self.rng);
+            }
+            st.modified[index] = self.iteration;
+        }
+        st.values[index]
+    }
+
+    /// The coordinates of a stream as they are (not brought up to date; for recording seeds).
+    pub fn raw(&self, stream: usize) -> &[f64] {
+        self.streams
+            .get(stream)
+            .map(|s| s.values.as_slice())
+            .unwrap_or(&[])
+    }
+
+    /// Bring every existing coordinate up to date (e.g. before exporting the vector).
+    pub fn materialise(&mut self) {
+        for s in 0..self.streams.len() {
+            for i in 0..self.streams[s].values.len() {
+                self.get(s, i);
+            }
+        }
+    }
+
+    /// Whether the current iteration is a large step.
+    pub fn is_large_step(&self) -> bool {
+        self.large
+    }
+}
+
+/// Kelemen's proposal: a large step with probability `large_step_probability`, otherwise a small
+/// step with `small_step` (see [`SmallStep`]; defaults `s1 = 1/1024`, `s2 = 1/64`, large steps 0.3).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Kelemen {
+    /// Probability of a large step.
+    pub large_step_probability: f64,
+    /// The small-step kernel.
+    pub small_step: SmallStep,
+}
+
+impl Default for Kelemen {
+    fn default() -> Self {
+        Self {
+            large_step_probability: 0.3,
+            small_step: SmallStep::default(),
+        }
+    }
+}
+
+impl Kelemen {
+    /// A proposal with the given parameters.
+    pub fn new(large_step_probability: f64, small_step: SmallStep) -> Result<Self, McmcError> {
+        crate::error::check_probability("large_step_probability", large_step_probability)?;
+        small_step.validate()?;
+        Ok(Self {
+            large_step_probability,
+            small_step,
+        })
+    }
+}
+
+/// Move kinds reported by [`Kelemen`].
+pub const SMALL_STEP: usize = 0;
+/// See [`SMALL_STEP`].
+pub const LARGE_STEP: usize = 1;
+
+impl Proposal<PrimarySample> for Kelemen {
+    fn propose(&self, x: &PrimarySample, y: &mut PrimarySample, rng: &mut ChainRng) -> Proposed {
+        y.clone_from(x);
+        y.step = self.small_step;
+        y.iteration = x.iteration + 1;
+        y.large = uniform(rng) < self.large_step_probability;
+        if y.large {
+            y.last_large = y.iteration;
+        }
+        // The candidate draws its lazy coordinates from its own generator, seeded from the chain's.
+        y.rng = ChainRng::seed_from_u64(rng.next_u64());
+        Proposed {
+            ln_ratio: 0.0,
+            kind: if y.large { LARGE_STEP } else { SMALL_STEP },
+        }
+    }
+
+    fn kinds(&self) -> Vec<String> {
+        vec!["small_step".into(), "large_step".into()]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::stream;
+
+    #[test]
+    fn coordinates_are_stable_until_proposed() {
+        let mut s = PrimarySample::new(2, SmallStep::default(), 1).unwrap();
+        let a = s.get(0, 3);
+        assert_eq!(s.get(0, 3), a);
+        assert!((0.0..1.0).contains(&a));
+        assert_eq!(s.raw(0).len(), 4);
+    }
+
+    #[test]
+    fn small_steps_move_coordinates_by_small_offsets_and_large_steps_forget() {
+        let k = Kelemen::default();
+        let mut rng = stream(4, 0);
+        let mut x = PrimarySample::new(1, SmallStep::default(), 2).unwrap();
+        let a = x.get(0, 0);
+        let mut y = x.clone();
+        let mut moved_small = 0;
+        for _ in 0..200 {
+            let p = k.propose(&x, &mut y, &mut rng);
+            let b = y.get(0, 0);
+            let mut d = b - a;
+            d -= d.round();
+            if p.kind == SMALL_STEP {
+                assert!(d.abs() <= 1.0 / 64.0 + 1e-12);
+                moved_small += 1;
+            }
+        }
+        assert!(moved_small > 100);
+    }
+
+    #[test]
+    fn a_coordinate_first_read_after_missed_iterations_catches_up() {
+        // Accept several small steps without reading coordinate 1, then read it: it must have been
+        // perturbed once per missed iteration (so it differs from its creation value by at most
+        // n·s2).
+        let k = Kelemen::new(0.0, SmallStep::default()).unwrap();
+        let mut rng = stream(5, 0);
+        let mut x = PrimarySample::new(1, SmallStep::default(), 3).unwrap();
+        let c1 = x.get(0, 1);
+        for _ in 0..10 {
+            let mut y = x.clone();
+            k.propose(&x, &mut y, &mut rng);
+            y.get(0, 0);
+            x = y;
+        }
+        let v = x.get(0, 1);
+        let mut d = v - c1;
+        d -= d.round();
+        assert!(d.abs() <= 10.0 / 64.0 + 1e-12);
+        assert_ne!(v, c1);
+    }
+}
