@@ -12,6 +12,7 @@ pub mod geometry;
 pub mod integrators;
 pub mod light;
 pub mod math;
+pub mod metropolis;
 pub mod path;
 pub mod sampler;
 pub mod scene;

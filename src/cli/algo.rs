@@ -13,6 +13,10 @@ pub enum Algo {
     Lt,
     /// Bidirectional path tracing, all strategies, MIS.
     Bdpt,
+    /// Primary-sample-space MLT (Kelemen) on BDPT with all connections.
+    Pssmlt,
+    /// Multiplexed MLT (Hachisuka et al.): one strategy per sample, chains per path length.
+    Mmlt,
 }
 
 impl Algo {
@@ -22,6 +26,8 @@ impl Algo {
             Algo::Pt => "pt",
             Algo::Lt => "lt",
             Algo::Bdpt => "bdpt",
+            Algo::Pssmlt => "pssmlt",
+            Algo::Mmlt => "mmlt",
         }
     }
 }
@@ -88,4 +94,29 @@ pub fn bdpt(c: &Common) -> Bdpt {
         },
         heuristic: c.heuristic,
     }
+}
+
+pub fn pssmlt(
+    c: &Common,
+    m: &super::metropolis::MetropolisArgs,
+) -> Result<light_transport::metropolis::Pssmlt, super::CliError> {
+    Ok(light_transport::metropolis::Pssmlt {
+        bdpt: bdpt(c),
+        kelemen: m.kelemen()?,
+        importance: m.importance(),
+    })
+}
+
+pub fn mmlt(
+    c: &Common,
+    m: &super::metropolis::MetropolisArgs,
+) -> Result<light_transport::metropolis::Mmlt, super::CliError> {
+    Ok(light_transport::metropolis::Mmlt {
+        walk: WalkSettings {
+            max_edges: c.max_edges,
+        },
+        heuristic: c.heuristic,
+        kelemen: m.kelemen()?,
+        importance: m.importance(),
+    })
 }

@@ -5,12 +5,15 @@
 use super::CliError;
 use super::algo::{self, Algo, RenderOptions};
 use super::duration::parse_duration;
+use super::metropolis::{MetropolisArgs, run_method};
 use super::plot::{Series, error_plot};
 use super::render::write_outputs;
 use super::scene_arg;
 use clap::Args;
+use light_transport::film::Film;
 use light_transport::film::{Image, error_image, metrics, read_image, write_bytes_png};
 use light_transport::integrators::{Budget, Estimator, render};
+use light_transport::metropolis::Method;
 use light_transport::scene::Scene;
 use std::io::Write;
 use std::path::PathBuf;
@@ -36,6 +39,9 @@ pub struct CompareArgs {
     /// Seed, depth, resolution, exposure, MIS.
     #[command(flatten)]
     pub options: RenderOptions,
+    /// Metropolis options (pssmlt, mmlt).
+    #[command(flatten)]
+    pub metropolis: MetropolisArgs,
     /// Output folder. Default: `out/compare-<scene>`.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
@@ -51,6 +57,61 @@ struct Row {
     rel_mse: f64,
 }
 
+/// Records the error against the reference whenever the elapsed time passes a checkpoint.
+struct Checkpoints<'a> {
+    marks: Vec<Duration>,
+    next: usize,
+    name: &'static str,
+    reference: &'a Image,
+    rows: &'a mut Vec<Row>,
+    err: Option<CliError>,
+}
+
+impl<'a> Checkpoints<'a> {
+    fn new(
+        a: &CompareArgs,
+        name: &'static str,
+        reference: &'a Image,
+        rows: &'a mut Vec<Row>,
+    ) -> Self {
+        let n = a.checkpoints.max(1);
+        let marks = (1..=n)
+            .map(|k| a.time.mul_f64(k as f64 / n as f64))
+            .collect();
+        Self {
+            marks,
+            next: 0,
+            name,
+            reference,
+            rows,
+            err: None,
+        }
+    }
+
+    /// Record any checkpoint passed; `false` once the time is up or on error.
+    fn see(&mut self, film: &Film, elapsed: Duration, spp: u64) -> bool {
+        while self.next < self.marks.len() && elapsed >= self.marks[self.next] {
+            match metrics(&Image::from_film(film), self.reference) {
+                Ok(m) => self.rows.push(Row {
+                    algo: self.name,
+                    checkpoint: self.next + 1,
+                    seconds: elapsed.as_secs_f64(),
+                    spp,
+                    rmse: m.rmse,
+                    rel_mse: m.rel_mse,
+                }),
+                Err(e) => self.err = Some(e.into()),
+            }
+            self.next += 1;
+        }
+        self.err.is_none() && self.next < self.marks.len()
+    }
+
+    fn finish(self) -> Result<(), CliError> {
+        self.err.map_or(Ok(()), Err)
+    }
+}
+
 fn track<E: Estimator>(
     scene: &Scene,
     est: &E,
@@ -59,45 +120,53 @@ fn track<E: Estimator>(
     reference: &Image,
     rows: &mut Vec<Row>,
 ) -> Result<Image, CliError> {
-    let marks: Vec<Duration> = (1..=a.checkpoints.max(1))
-        .map(|k| a.time.mul_f64(k as f64 / a.checkpoints.max(1) as f64))
-        .collect();
-    let mut next = 0;
-    let mut err: Option<CliError> = None;
+    let mut cp = Checkpoints::new(a, name, reference, rows);
     let (film, stats) = render(
         scene,
         est,
         Budget::Time(a.time),
         a.options.seed,
-        |film, p| {
-            while next < marks.len() && p.elapsed >= marks[next] {
-                match metrics(&Image::from_film(film), reference) {
-                    Ok(m) => rows.push(Row {
-                        algo: name,
-                        checkpoint: next + 1,
-                        seconds: p.elapsed.as_secs_f64(),
-                        spp: p.passes,
-                        rmse: m.rmse,
-                        rel_mse: m.rel_mse,
-                    }),
-                    Err(e) => err = Some(e.into()),
-                }
-                next += 1;
-            }
-            err.is_none()
-        },
+        |film, p| cp.see(film, p.elapsed, p.passes),
     );
-    if let Some(e) = err {
-        return Err(e);
-    }
-    let img = Image::from_film(&film);
+    cp.finish()?;
     eprintln!(
         "  {name}: {} samples per pixel in {:.1} s, {:.2} M rays/s",
         stats.passes,
         stats.elapsed.as_secs_f64(),
         stats.rays as f64 / stats.elapsed.as_secs_f64().max(1e-9) / 1e6
     );
-    Ok(img)
+    Ok(Image::from_film(&film))
+}
+
+/// A Metropolis method at equal time: the clock includes its bootstrap and seeding.
+fn track_metropolis<M: Method>(
+    scene: &Scene,
+    method: &M,
+    a: &CompareArgs,
+    name: &'static str,
+    reference: &Image,
+    rows: &mut Vec<Row>,
+) -> Result<Image, CliError> {
+    let start = std::time::Instant::now();
+    let pixels = (scene.camera.width * scene.camera.height) as u64;
+    let settings = a.metropolis.settings(
+        light_transport::metropolis::Budget::Time(a.time),
+        a.options.seed,
+    );
+    let mut cp = Checkpoints::new(a, name, reference, rows);
+    let (film, s) = run_method(scene, method, &settings, true, |film, mutations, _| {
+        cp.see(film, start.elapsed(), mutations / pixels.max(1))
+    })?;
+    cp.finish()?;
+    let acc = s.stats.total();
+    eprintln!(
+        "  {name}: {:.1} mutations per pixel, bootstrap {:.1} s, acceptance {:.1}%, {:.2} M mutations/s",
+        s.mutations as f64 / pixels as f64,
+        s.bootstrap_time.as_secs_f64(),
+        100.0 * acc.acceptance_rate(),
+        s.mutations as f64 / s.chain_time.as_secs_f64().max(1e-9) / 1e6
+    );
+    Ok(Image::from_film(&film))
 }
 
 pub fn run(a: CompareArgs) -> Result<(), CliError> {
@@ -183,6 +252,22 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
                 &algo::bdpt(&common),
                 &a,
                 "bdpt",
+                &reference,
+                &mut rows,
+            )?,
+            Algo::Pssmlt => track_metropolis(
+                &scene,
+                &algo::pssmlt(&common, &a.metropolis)?,
+                &a,
+                "pssmlt",
+                &reference,
+                &mut rows,
+            )?,
+            Algo::Mmlt => track_metropolis(
+                &scene,
+                &algo::mmlt(&common, &a.metropolis)?,
+                &a,
+                "mmlt",
                 &reference,
                 &mut rows,
             )?,

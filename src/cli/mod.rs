@@ -5,6 +5,7 @@ mod compare;
 mod diff;
 mod duration;
 mod info;
+mod metropolis;
 mod plot;
 mod reference;
 mod render;

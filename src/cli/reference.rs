@@ -52,6 +52,7 @@ pub fn run(mut a: ReferenceArgs) -> Result<(), CliError> {
         scene: a.scene,
         algo: a.algo,
         options: a.options,
+        metropolis: super::metropolis::MetropolisArgs::default_values(),
         write_every: Duration::from_secs(60),
         threads: None,
         quiet: false,

@@ -4,11 +4,13 @@
 use super::CliError;
 use super::algo::{self, Algo, RenderOptions};
 use super::duration::parse_duration;
+use super::metropolis::{MetropolisArgs, print_stats, run_method};
 use super::scene_arg;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use light_transport::film::{Film, Image, write_exr, write_png};
 use light_transport::integrators::{Budget, Estimator, RenderStats, render};
+use light_transport::metropolis;
 use light_transport::path::MisHeuristic;
 use light_transport::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -23,7 +25,8 @@ pub struct RenderArgs {
     /// Algorithm.
     #[arg(long, value_enum, default_value_t = Algo::Bdpt)]
     pub algo: Algo,
-    /// Samples per pixel (default 16 when no --time is given).
+    /// Samples per pixel (mutations per pixel for Metropolis algorithms; default 16 when no
+    /// --time is given).
     #[arg(long, conflicts_with = "time")]
     pub spp: Option<u64>,
     /// Wall-clock budget, e.g. 30s, 2m, 1h.
@@ -39,6 +42,9 @@ pub struct RenderArgs {
     /// Seed, depth, resolution, exposure, MIS.
     #[command(flatten)]
     pub options: RenderOptions,
+    /// Metropolis options (pssmlt, mmlt).
+    #[command(flatten)]
+    pub metropolis: MetropolisArgs,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -155,6 +161,7 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
             last_write = Instant::now();
         }
     };
+    let mut mlt_stats = None;
     let (film, stats) = match a.algo {
         Algo::Pt => run_integrator(
             &scene,
@@ -180,6 +187,45 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
             a.quiet,
             every,
         ),
+        Algo::Pssmlt | Algo::Mmlt => {
+            let mb = match budget {
+                Budget::SamplesPerPixel(n) => metropolis::Budget::MutationsPerPixel(n as f64),
+                Budget::Time(t) => metropolis::Budget::Time(t),
+            };
+            let settings = a.metropolis.settings(mb, a.options.seed);
+            let mut every = every;
+            let cb = |film: &Film, _m: u64, _e: std::time::Duration| {
+                every(film);
+                true
+            };
+            let (film, s) = if a.algo == Algo::Pssmlt {
+                run_method(
+                    &scene,
+                    &algo::pssmlt(&common, &a.metropolis)?,
+                    &settings,
+                    a.quiet,
+                    cb,
+                )?
+            } else {
+                run_method(
+                    &scene,
+                    &algo::mmlt(&common, &a.metropolis)?,
+                    &settings,
+                    a.quiet,
+                    cb,
+                )?
+            };
+            let pixels = (scene.camera.width * scene.camera.height) as u64;
+            let rs = RenderStats {
+                passes: s.mutations / pixels.max(1),
+                samples: s.mutations,
+                rays: s.rays,
+                elapsed: s.bootstrap_time + s.seed_time + s.chain_time,
+                discarded: film.discarded,
+            };
+            mlt_stats = Some(s);
+            (film, rs)
+        }
     };
     let t = Instant::now();
     let img = Image::from_film(&film);
@@ -227,6 +273,9 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
         stats.rays as f64 / secs / 1e6
     );
     println!("discarded  {} non-finite samples", stats.discarded);
+    if let Some(s) = &mlt_stats {
+        print_stats(s, (scene.camera.width * scene.camera.height) as f64);
+    }
     println!("wrote      {} and {}", exr.display(), png.display());
     Ok(())
 }

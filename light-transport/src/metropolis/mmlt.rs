@@ -1,0 +1,121 @@
+//! Multiplexed MLT (Hachisuka, Kaplanyan & Dachsbacher 2014): chains are grouped by path length
+//! `k` (edges); a sample uses one bidirectional strategy `(s, k + 1 − s)`, chosen by the first
+//! number of the technique stream (a coordinate Kelemen mutations perturb like any other), and
+//! contributes its MIS-weighted value divided by the probability of choosing the strategy. Paths of
+//! one edge use `(0, 2)` only (as in BDPT).
+
+use super::driver::{Contribution, Method};
+use super::importance::ImportanceKind;
+use super::pssmlt::{PrimaryState, mutate_primary};
+use super::stream::PrimaryStream;
+use crate::path::{
+    MisHeuristic, Vertex, WalkSettings, camera_subpath, connect, light_subpath, mis_weight,
+};
+use crate::sampler::{CAMERA_STREAM, STREAMS, SampleStream, TECHNIQUE_STREAM};
+use crate::scene::Scene;
+use mcmc_core::kernel::Observer;
+use mcmc_core::primary_sample::{Kelemen, PrimarySample};
+use mcmc_core::{Chain, ChainRng, Proposal};
+use std::cell::RefCell;
+
+thread_local! {
+    static SUBPATHS: RefCell<(Vec<Vertex>, Vec<Vertex>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+}
+
+/// MMLT settings.
+#[derive(Clone, Copy, Debug)]
+pub struct Mmlt {
+    /// Path length limit (chains exist for every length `1 ..= max_edges`).
+    pub walk: WalkSettings,
+    /// MIS heuristic of the strategy weights.
+    pub heuristic: MisHeuristic,
+    /// Small and large steps.
+    pub kelemen: Kelemen,
+    /// Colour to scalar.
+    pub importance: ImportanceKind,
+}
+
+impl Mmlt {
+    /// Number of strategies for paths of `k` edges.
+    pub fn strategies(k: usize) -> usize {
+        if k == 1 { 1 } else { k + 1 }
+    }
+
+    /// Evaluate a state of length `k` (its group + 1).
+    pub fn evaluate(&self, scene: &Scene, k: usize, state: &mut PrimaryState) {
+        let (w, h) = (scene.camera.width as f64, scene.camera.height as f64);
+        state.contribution.splats.clear();
+        state.contribution.importance = 0.0;
+        let n = Self::strategies(k);
+        let mut stream = PrimaryStream::new(&mut state.sample);
+        stream.start_stream(TECHNIQUE_STREAM);
+        let u = stream.next_1d();
+        let s = ((u * n as f64) as usize).min(n - 1);
+        let t = k + 1 - s;
+        let value = SUBPATHS.with(|b| {
+            let (cam, light) = &mut *b.borrow_mut();
+            camera_subpath(scene, &mut stream, t, None, cam);
+            light_subpath(scene, &mut stream, s, light);
+            if cam.len() < t || light.len() < s {
+                return None;
+            }
+            let c = connect(scene, light, cam, s, t)?;
+            let wgt = mis_weight(scene, light, cam, s, t, self.heuristic);
+            Some((c.raster, c.value * (wgt * n as f64)))
+        });
+        if let Some((raster, v)) = value
+            && !v.is_black()
+        {
+            let r = raster.unwrap_or([
+                state.sample.get(CAMERA_STREAM, 0) * w,
+                state.sample.get(CAMERA_STREAM, 1) * h,
+            ]);
+            state.contribution.splats.push((r, v));
+            state.contribution.importance = self.importance.of(v);
+        }
+    }
+}
+
+impl Method for Mmlt {
+    type State = PrimaryState;
+
+    fn groups(&self) -> usize {
+        self.walk.max_edges
+    }
+
+    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> PrimaryState {
+        let sample = PrimarySample::new(STREAMS, self.kelemen.small_step, seed)
+            .expect("small step validated when the integrator was built");
+        let mut s = PrimaryState {
+            sample,
+            contribution: Contribution::default(),
+            length: g + 1,
+        };
+        self.evaluate(scene, g + 1, &mut s);
+        s
+    }
+
+    fn mutate<O: Observer<PrimaryState>>(
+        &self,
+        scene: &Scene,
+        chain: &mut Chain<PrimaryState>,
+        n: u64,
+        rng: &mut ChainRng,
+        observer: &mut O,
+    ) {
+        // A chain keeps the path length of the bootstrap sample it was seeded from.
+        mutate_primary(
+            scene,
+            self.kelemen,
+            |sc, st| self.evaluate(sc, st.length, st),
+            chain,
+            n,
+            rng,
+            observer,
+        )
+    }
+
+    fn kinds(&self) -> Vec<String> {
+        self.kelemen.kinds()
+    }
+}

@@ -1,0 +1,180 @@
+//! Primary-sample-space MLT (Kelemen et al. 2002) on bidirectional path tracing: the state is a
+//! lazy primary sample (camera, light and technique streams), the target is the scalar importance
+//! of the sum of MIS-weighted contributions of *all* strategies connecting the two subpaths it
+//! generates, and the moves are Kelemen's small and large steps.
+
+use super::driver::{Contribution, Method, Recordable};
+use super::importance::ImportanceKind;
+use super::stream::PrimaryStream;
+use crate::integrators::Bdpt;
+use crate::path::{Vertex, camera_subpath, light_subpath};
+use crate::sampler::{CAMERA_STREAM, STREAMS};
+use crate::scene::Scene;
+use mcmc_core::kernel::Observer;
+use mcmc_core::primary_sample::{Kelemen, PrimarySample};
+use mcmc_core::{Chain, ChainRng, Kernel, MetropolisHastings, Proposal, Proposed, Target};
+use std::cell::RefCell;
+
+thread_local! {
+    static SUBPATHS: RefCell<(Vec<Vertex>, Vec<Vertex>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+}
+
+/// A PSSMLT (or MMLT) chain state: the primary sample and what it evaluated to.
+#[derive(Clone, Debug)]
+pub struct PrimaryState {
+    /// The lazy primary sample.
+    pub sample: PrimarySample,
+    /// Its contribution.
+    pub contribution: Contribution,
+    /// The path length (edges) of an MMLT chain; 0 for PSSMLT (all lengths at once).
+    pub length: usize,
+}
+
+impl Recordable for PrimaryState {
+    fn contribution(&self) -> &Contribution {
+        &self.contribution
+    }
+}
+
+/// PSSMLT settings.
+#[derive(Clone, Copy, Debug)]
+pub struct Pssmlt {
+    /// The BDPT that evaluates a sample (path length limit, MIS heuristic).
+    pub bdpt: Bdpt,
+    /// Small and large steps.
+    pub kelemen: Kelemen,
+    /// Colour to scalar.
+    pub importance: ImportanceKind,
+}
+
+impl Pssmlt {
+    /// Evaluate a state: trace both subpaths from its numbers and sum every strategy.
+    pub fn evaluate(&self, scene: &Scene, state: &mut PrimaryState) {
+        let (w, h) = (scene.camera.width as f64, scene.camera.height as f64);
+        state.contribution.splats.clear();
+        SUBPATHS.with(|b| {
+            let (cam, light) = &mut *b.borrow_mut();
+            let mut stream = PrimaryStream::new(&mut state.sample);
+            camera_subpath(
+                scene,
+                &mut stream,
+                self.bdpt.walk.max_camera_vertices(),
+                None,
+                cam,
+            );
+            light_subpath(
+                scene,
+                &mut stream,
+                self.bdpt.walk.max_light_vertices(),
+                light,
+            );
+            let own = self
+                .bdpt
+                .evaluate(scene, light, cam, &mut state.contribution.splats);
+            let raster = [
+                state.sample.get(CAMERA_STREAM, 0) * w,
+                state.sample.get(CAMERA_STREAM, 1) * h,
+            ];
+            if !own.is_black() {
+                state.contribution.splats.push((raster, own));
+            }
+        });
+        state.contribution.importance = state
+            .contribution
+            .splats
+            .iter()
+            .map(|s| self.importance.of(s.1))
+            .sum();
+    }
+}
+
+/// The chain's target: the importance of a primary state (evaluated lazily, cached in the state).
+pub struct PrimaryTarget<'a, F> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Evaluates a state in place.
+    pub eval: F,
+}
+
+impl<F: Fn(&Scene, &mut PrimaryState)> Target<PrimaryState> for PrimaryTarget<'_, F> {
+    fn ln_density(&self, x: &PrimaryState) -> f64 {
+        x.contribution.importance.ln()
+    }
+    fn evaluate(&self, x: &mut PrimaryState) -> f64 {
+        (self.eval)(self.scene, x);
+        x.contribution.importance.ln()
+    }
+}
+
+/// Kelemen's proposal acting on the primary sample of a state.
+#[derive(Clone, Copy, Debug)]
+pub struct PrimaryProposal(pub Kelemen);
+
+impl Proposal<PrimaryState> for PrimaryProposal {
+    fn propose(&self, x: &PrimaryState, y: &mut PrimaryState, rng: &mut ChainRng) -> Proposed {
+        y.length = x.length;
+        self.0.propose(&x.sample, &mut y.sample, rng)
+    }
+    fn kinds(&self) -> Vec<String> {
+        self.0.kinds()
+    }
+}
+
+/// Run `n` Kelemen mutations on a primary-sample chain with evaluation `eval`.
+pub fn mutate_primary<O: Observer<PrimaryState>>(
+    scene: &Scene,
+    kelemen: Kelemen,
+    eval: impl Fn(&Scene, &mut PrimaryState),
+    chain: &mut Chain<PrimaryState>,
+    n: u64,
+    rng: &mut ChainRng,
+    observer: &mut O,
+) {
+    let mut mh = MetropolisHastings::new(PrimaryTarget { scene, eval }, PrimaryProposal(kelemen));
+    for _ in 0..n {
+        mh.step(chain, rng, observer);
+    }
+}
+
+impl Method for Pssmlt {
+    type State = PrimaryState;
+
+    fn groups(&self) -> usize {
+        1
+    }
+
+    fn independent(&self, scene: &Scene, _g: usize, seed: u64) -> PrimaryState {
+        let sample = PrimarySample::new(STREAMS, self.kelemen.small_step, seed)
+            .expect("small step validated when the integrator was built");
+        let mut s = PrimaryState {
+            sample,
+            contribution: Contribution::default(),
+            length: 0,
+        };
+        self.evaluate(scene, &mut s);
+        s
+    }
+
+    fn mutate<O: Observer<PrimaryState>>(
+        &self,
+        scene: &Scene,
+        chain: &mut Chain<PrimaryState>,
+        n: u64,
+        rng: &mut ChainRng,
+        observer: &mut O,
+    ) {
+        mutate_primary(
+            scene,
+            self.kelemen,
+            |sc, st| self.evaluate(sc, st),
+            chain,
+            n,
+            rng,
+            observer,
+        )
+    }
+
+    fn kinds(&self) -> Vec<String> {
+        self.kelemen.kinds()
+    }
+}
