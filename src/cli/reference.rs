@@ -33,7 +33,7 @@ pub struct ReferenceArgs {
 
 /// References use seed `S ^ REFERENCE_SEED` so that a reference never replays a render made with
 /// the same `--seed` (which would show zero error).
-pub const REFERENCE_SEED: u64 = 0x5eed_0f_4ef0;
+pub const REFERENCE_SEED: u64 = 0x005e_ed0f_4ef0;
 
 pub fn run(mut a: ReferenceArgs) -> Result<(), CliError> {
     a.options.seed ^= REFERENCE_SEED;

@@ -138,7 +138,7 @@ impl Image {
     /// is exactly a pixel-area average at the lower resolution). `None` unless `k` divides both
     /// dimensions.
     pub fn downsample(&self, k: usize) -> Option<Image> {
-        if k == 0 || self.width % k != 0 || self.height % k != 0 {
+        if k == 0 || !self.width.is_multiple_of(k) || !self.height.is_multiple_of(k) {
             return None;
         }
         let (w, h) = (self.width / k, self.height / k);

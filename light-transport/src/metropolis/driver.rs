@@ -130,6 +130,9 @@ pub struct MetropolisStats {
     pub rays: u64,
 }
 
+/// A splat: raster position and colour.
+type Splat = ([f64; 2], Rgb);
+
 const BOOTSTRAP: u64 = 0xB007;
 const CHAINS: u64 = 0xC4A1;
 const SPLIT: usize = 16;
@@ -286,7 +289,7 @@ pub fn run<M: Method>(
             None => per_round,
         };
         let round_start = Instant::now();
-        let outputs: Vec<(Vec<([f64; 2], Rgb)>, u64)> = chains
+        let outputs: Vec<(Vec<Splat>, u64)> = chains
             .par_chunks_mut(size)
             .zip(rngs.par_chunks_mut(size))
             .map(|(cs, rs)| {
