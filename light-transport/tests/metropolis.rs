@@ -157,7 +157,7 @@ fn seeding_is_unbiased_on_a_1d_toy_and_uniform_seeding_is_caught() {
     let exact: Vec<f64> = (0..32)
         .map(|j| f_integral(j as f64 / 32.0, (j + 1) as f64 / 32.0) * 32.0)
         .collect();
-    let p = min_p(&toy_runs(Seeding::Resample), &[exact.clone()]);
+    let p = min_p(&toy_runs(Seeding::Resample), std::slice::from_ref(&exact));
     println!("resampled seeds: p = {p:.3e}");
     assert!(p > ALPHA, "resampled seeding is biased (p = {p:.2e})");
     let q = min_p(&toy_runs(Seeding::UniformBiased), &[exact]);
@@ -207,8 +207,7 @@ fn a_sampler_that_cannot_replay_its_seeds_is_refused() {
         &settings,
         |_, _, _| true,
     )
-    .err()
-    .expect("refused");
+    .expect_err("refused");
     assert!(err.to_string().contains("replay"), "{err}");
 }
 
