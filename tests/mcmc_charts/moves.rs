@@ -147,6 +147,29 @@ proptest! {
         }
     }
 
+    /// The auxiliary visibility-only target (paper eq. 18): `π'_i(u) = V(T_i(u))` for a predicate
+    /// `V`, sampled in each chart with PSSMLT moves; its exact law is uniform `u` given `V`.
+    #[test]
+    fn in_chart_moves_keep_the_visibility_target(c1 in any_chart(), threshold in 0.6f64..1.4, seed in any::<u64>()) {
+        let atlas = Atlas::new(vec![c1.boxed()]);
+        let f = Cells { b: 2, w: vec![1.0; 4] };
+        let visible = move |x: &P2| x[0] + x[1] < threshold;
+        let t = target(&atlas, &f, TargetKind::Visibility(Box::new(visible)));
+        let mut rng = stream(seed, 0);
+        let chart = atlas.chart(0).unwrap();
+        let dim = chart.dim();
+        let exact = |r: &mut ChainRng| loop {
+            let u: Vec<f64> = (0..dim).map(|_| uniform(r)).collect();
+            let mut s = State::in_chart(0, u);
+            if t.ln_density(0, &mut s) == 0.0 {
+                return s;
+            }
+        };
+        let mut mh = MetropolisHastings::new(Level { family: &t, level: 0 }, InChart::new(pssmlt_kernel()));
+        let inv = invariance(&exact, |s: &mut State, r: &mut ChainRng| mh_step(&t, &mut mh, s, r), |s: &State| s.u.clone(), &inv_config(3000, 3, false), &mut rng).unwrap();
+        prop_assert!(inv.passed, "{inv}");
+    }
+
     /// Serial tempering over the charts (+ identity) with random pseudo-priors: chart swaps are
     /// reversible, and whole steps keep the joint law of (chart, point, coordinates).
     #[test]
