@@ -165,6 +165,45 @@ impl Camera {
         }
     }
 
+    /// Density of the lens point (area measure): `1 / A_lens` (1 for a pinhole).
+    pub fn pdf_lens(&self) -> f64 {
+        1.0 / self.lens_area()
+    }
+
+    /// The ray leaving the world lens point `lens` through raster position `raster` (pixels from the
+    /// left and top edges), for mutations that keep the lens point and move the image position;
+    /// `None` outside the image or for a point off the lens plane.
+    pub fn ray_through(&self, lens: DVec3, raster: [f64; 2]) -> Option<CameraSample> {
+        let (w, h) = (self.width as f64, self.height as f64);
+        if !(raster[0] >= 0.0 && raster[0] < w && raster[1] >= 0.0 && raster[1] < h) {
+            return None;
+        }
+        let p_img = DVec3::new(
+            (2.0 * raster[0] / w - 1.0) * self.half[0],
+            (1.0 - 2.0 * raster[1] / h) * self.half[1],
+            1.0,
+        );
+        let o_cam = self.to_camera.transform_point3(lens);
+        if !(o_cam.z.abs() <= 1e-9 * (1.0 + o_cam.length())) {
+            return None;
+        }
+        let d_cam = if self.lens_radius > 0.0 {
+            (p_img * self.focal_distance - o_cam).normalize()
+        } else {
+            p_img.normalize()
+        };
+        let (we, pdf_dir, _) = self.importance_camera_space(o_cam, d_cam);
+        if we == 0.0 {
+            return None;
+        }
+        Some(CameraSample {
+            ray: Ray::new(lens, self.to_world.transform_vector3(d_cam).normalize()),
+            we,
+            pdf_pos: self.pdf_lens(),
+            pdf_dir,
+        })
+    }
+
     /// `(W_e, p_dir, raster)` of a camera-space ray from lens point `o` in unit direction `d`;
     /// zero and `None` outside the image. The image position is where the ray crosses the plane in
     /// focus (for a pinhole, the image plane at distance 1).

@@ -14,6 +14,7 @@ pub mod light;
 pub mod math;
 pub mod metropolis;
 pub mod path;
+pub mod pathspace;
 pub mod sampler;
 pub mod scene;
 pub mod spectrum;

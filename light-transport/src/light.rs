@@ -125,21 +125,9 @@ impl LightKind {
         u_dir: [f64; 2],
     ) -> Option<EmissionSample> {
         match *self {
-            LightKind::Area { two_sided, .. } => {
+            LightKind::Area { .. } => {
                 let (point, pdf_pos) = self.sample_point(prims, u_pos)?;
-                let (front, v) = if two_sided {
-                    if u_dir[0] < 0.5 {
-                        (true, 2.0 * u_dir[0])
-                    } else {
-                        (false, 2.0 * u_dir[0] - 1.0)
-                    }
-                } else {
-                    (true, u_dir[0])
-                };
-                let local = cosine_hemisphere([v, u_dir[1]]);
-                let n = if front { point.n } else { -point.n };
-                let w = Frame::from_normal(n).to_world(local);
-                let pdf_dir = local.z / PI * if two_sided { 0.5 } else { 1.0 };
+                let (w, pdf_dir) = self.sample_direction(point.n, u_dir)?;
                 Some(EmissionSample {
                     point,
                     w,
@@ -153,7 +141,7 @@ impl LightKind {
                 position,
                 intensity,
             } => {
-                let w = uniform_sphere(u_dir);
+                let (w, pdf_dir) = self.sample_direction(DVec3::Z, u_dir)?;
                 let point = SurfacePoint {
                     p: position,
                     n: w,
@@ -166,10 +154,34 @@ impl LightKind {
                     w,
                     le: intensity,
                     pdf_pos: 1.0,
-                    pdf_dir: 1.0 / (4.0 * PI),
+                    pdf_dir,
                     delta_pos: true,
                 })
             }
+        }
+    }
+
+    /// Sample the direction of emission from a point of the light with normal `n` (ignored for a
+    /// point light) from the direction numbers `u_dir`: `(w, density in solid angle)`.
+    pub fn sample_direction(&self, n: DVec3, u_dir: [f64; 2]) -> Option<(DVec3, f64)> {
+        match *self {
+            LightKind::Area { two_sided, .. } => {
+                let (front, v) = if two_sided {
+                    if u_dir[0] < 0.5 {
+                        (true, 2.0 * u_dir[0])
+                    } else {
+                        (false, 2.0 * u_dir[0] - 1.0)
+                    }
+                } else {
+                    (true, u_dir[0])
+                };
+                let local = cosine_hemisphere([v, u_dir[1]]);
+                let side = if front { n } else { -n };
+                let w = Frame::from_normal(side).to_world(local);
+                let pdf = local.z / PI * if two_sided { 0.5 } else { 1.0 };
+                (pdf > 0.0).then_some((w, pdf))
+            }
+            LightKind::Point { .. } => Some((uniform_sphere(u_dir), 1.0 / (4.0 * PI))),
         }
     }
 

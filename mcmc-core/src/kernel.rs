@@ -9,6 +9,7 @@
 //! * a zero-density candidate or a reverse move of zero density (`r = −inf`) is rejected.
 
 use crate::rng::uniform;
+use crate::stats::Failure;
 use crate::{ChainRng, McmcError, Proposal, Stats, Target};
 
 /// The acceptance probability and whether the inputs were invalid (NaN or `+inf`).
@@ -125,6 +126,14 @@ impl<S> Chain<S> {
             self.ln_density = ln_candidate;
         }
         accepted
+    }
+
+    /// Count a proposal of `kind` that could not be made and stay: the observer sees the current
+    /// state proposed to itself with `a = 0`, so expected-value recording still counts the step.
+    #[inline]
+    pub fn fail<O: Observer<S>>(&mut self, kind: usize, why: Failure, observer: &mut O) {
+        observer.observe(&self.state, &self.state, 0.0, kind);
+        self.stats.record_failure(kind, why);
     }
 }
 

@@ -73,5 +73,5 @@ pub use error::McmcError;
 pub use kernel::{Chain, FnObserver, Kernel, MetropolisHastings, Observer};
 pub use proposal::{Density, Outcome, Proposal, Proposed};
 pub use rng::ChainRng;
-pub use stats::{KindStats, Stats};
+pub use stats::{Failure, KindStats, Stats};
 pub use target::{Family, FnFamily, Level, Target, Tempered};

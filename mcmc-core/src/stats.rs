@@ -13,6 +13,11 @@ pub struct KindStats {
     pub acceptance_sum: f64,
     /// Proposals rejected because a density or ratio was NaN or `+inf`.
     pub invalid: u64,
+    /// Proposals that could not be made because the move does not apply to the current state
+    /// (counted in `proposed`, rejected with `a = 0`).
+    pub not_applicable: u64,
+    /// Proposals whose construction failed part-way (counted in `proposed`, rejected with `a = 0`).
+    pub failed: u64,
 }
 
 impl KindStats {
@@ -32,7 +37,19 @@ impl KindStats {
         self.accepted += o.accepted;
         self.acceptance_sum += o.acceptance_sum;
         self.invalid += o.invalid;
+        self.not_applicable += o.not_applicable;
+        self.failed += o.failed;
     }
+}
+
+/// Why a proposal could not be made (see [`crate::Chain::fail`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Failure {
+    /// The move does not apply to the current state (e.g. a perturbation of a path without the
+    /// vertex types it needs).
+    NotApplicable,
+    /// The construction of the candidate failed (e.g. a ray escaped the scene).
+    Failed,
 }
 
 /// Counters indexed by move kind ([`crate::Proposed::kind`]).
@@ -54,6 +71,17 @@ impl Stats {
         k.accepted += accepted as u64;
         k.acceptance_sum += acceptance;
         k.invalid += invalid as u64;
+    }
+
+    /// Record a proposal that could not be made.
+    #[inline]
+    pub fn record_failure(&mut self, kind: usize, why: Failure) {
+        self.record(kind, 0.0, false, false);
+        let k = &mut self.kinds[kind];
+        match why {
+            Failure::NotApplicable => k.not_applicable += 1,
+            Failure::Failed => k.failed += 1,
+        }
     }
 
     /// All kinds together.
@@ -91,19 +119,21 @@ impl fmt::Display for StatsTable<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "{:<28} {:>12} {:>12} {:>9} {:>9}",
-            "move", "proposed", "accepted", "rate", "invalid"
+            "{:<28} {:>12} {:>12} {:>9} {:>9} {:>12} {:>9}",
+            "move", "proposed", "accepted", "rate", "invalid", "n/applicable", "failed"
         )?;
         for (i, k) in self.stats.kinds.iter().enumerate() {
             let name = self.names.get(i).map(String::as_str).unwrap_or("?");
             writeln!(
                 f,
-                "{:<28} {:>12} {:>12} {:>8.2}% {:>9}",
+                "{:<28} {:>12} {:>12} {:>8.2}% {:>9} {:>12} {:>9}",
                 name,
                 k.proposed,
                 k.accepted,
                 100.0 * k.acceptance_rate(),
-                k.invalid
+                k.invalid,
+                k.not_applicable,
+                k.failed
             )?;
         }
         Ok(())

@@ -245,6 +245,26 @@ impl Bsdf {
         })
     }
 
+    /// The direction a delta lobe sends `wo` to: the mirror direction (`transmit = false`) or the
+    /// refracted one through the first dielectric lobe (`transmit = true`); `None` when no delta
+    /// lobe produces it (no such lobe, total internal reflection). Specular chains keep their
+    /// reflection/refraction pattern under perturbation this way (Veach & Guibas 1997, §5.3).
+    pub fn delta_direction(&self, wo: DVec3, transmit: bool, mode: TransportMode) -> Option<DVec3> {
+        let lo = local(&self.frame, wo)?;
+        if lo.z == 0.0 {
+            return None;
+        }
+        let li = if transmit {
+            let (up, sign, eta) = dielectric::orient(lo, self.eta()?);
+            let t = fresnel::refract(up, DVec3::Z, eta)?;
+            DVec3::new(t.x, t.y, t.z * sign)
+        } else {
+            mirror::mirror_z(lo)
+        };
+        let wi = self.frame.to_world(li);
+        self.eval_delta(wo, wi, mode).map(|s| s.wi)
+    }
+
     /// Each lobe's share of the density at `wi` (`delta = false`: `P_j pdf_j`) or of the delta
     /// probability (`delta = true`): the branch probabilities of [`Bsdf::invert`].
     pub fn lobe_weights(&self, wo: DVec3, wi: DVec3, delta: bool) -> LobeWeights {

@@ -52,6 +52,9 @@ pub trait Method: Sync {
     );
     /// Names of the move kinds (for statistics).
     fn kinds(&self) -> Vec<String>;
+    /// Told the per-group normalisations `b_g` once the bootstrap is done, before any chain runs
+    /// (e.g. to choose path lengths in proportion to their energy).
+    fn bootstrap_done(&self, _group_normalisation: &[f64]) {}
 }
 
 /// How long to run the chains.
@@ -148,14 +151,20 @@ fn key(seed: u64, g: usize, i: usize) -> u64 {
     z ^ (z >> 31)
 }
 
-struct SplatRecorder<'a> {
-    splats: &'a mut Vec<([f64; 2], Rgb)>,
-    b: f64,
+/// The expected-value recorder: every proposal deposits `a` times the candidate's splats and
+/// `1 − a` times the current state's, each scaled by `b / I` (so a chain whose states have density
+/// `I / b` deposits the image). Energy redistribution uses it with `b` = its energy quantum.
+pub struct SplatRecorder<'a> {
+    /// Where splats go.
+    pub splats: &'a mut Vec<([f64; 2], Rgb)>,
+    /// The normalisation.
+    pub b: f64,
 }
 
 impl SplatRecorder<'_> {
+    /// Deposit `w` times the state's splats, scaled by `b / I`.
     #[inline]
-    fn record<S: Recordable>(&mut self, s: &S, w: f64) {
+    pub fn record<S: Recordable>(&mut self, s: &S, w: f64) {
         let c = s.contribution();
         if w <= 0.0 || !(c.importance > 0.0) || !c.importance.is_finite() {
             return;
@@ -227,6 +236,7 @@ pub fn run<M: Method>(
         .collect();
     stats.normalisation = stats.group_normalisation.iter().sum();
     stats.bootstrap_time = t.elapsed();
+    method.bootstrap_done(&stats.group_normalisation);
     if !(stats.normalisation > 0.0) {
         return Err(Error::InvalidScene(format!(
             "no light reached the camera in {n} bootstrap paths: nothing to render (raise --bootstrap, or check the lights)"

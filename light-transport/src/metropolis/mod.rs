@@ -17,7 +17,8 @@ mod pssmlt;
 mod stream;
 
 pub use driver::{
-    Budget, Contribution, Method, MetropolisSettings, MetropolisStats, Recordable, Seeding, run,
+    Budget, Contribution, Method, MetropolisSettings, MetropolisStats, Recordable, Seeding,
+    SplatRecorder, run,
 };
 pub use importance::ImportanceKind;
 pub use mmlt::Mmlt;

@@ -46,6 +46,26 @@ pub fn connect(
     s: usize,
     t: usize,
 ) -> Option<Connection> {
+    let c = connect_unoccluded(scene, light, camera, s, t)?;
+    if s == 0 {
+        return Some(c);
+    }
+    let (qs, pt) = (&light[s - 1], &camera[t - 1]);
+    let n_pt = (t > 1).then(|| pt.n());
+    scene
+        .visible(qs.p(), surface_normal(scene, qs), pt.p(), n_pt)
+        .then_some(c)
+}
+
+/// [`connect`] without the visibility test, for paths whose connecting edge is known to be
+/// unoccluded (path-space mutations re-evaluate every strategy of a path they traced).
+pub fn connect_unoccluded(
+    scene: &Scene,
+    light: &[Vertex],
+    camera: &[Vertex],
+    s: usize,
+    t: usize,
+) -> Option<Connection> {
     if t == 0 || t > camera.len() || s > light.len() {
         return None;
     }
@@ -68,35 +88,24 @@ pub fn connect(
     if !qs.connectible() || !pt.connectible() {
         return None;
     }
-    if t == 1 {
-        let w = (qs.p() - pt.p()).normalize_or_zero();
-        let (we, _, raster) = scene.camera.importance(pt.p(), w);
-        let raster = raster?;
-        let fq = if s == 1 {
-            qs.le(scene, pt)
-        } else {
-            qs.f(pt, TransportMode::Importance)
-        };
-        let value = qs.beta * fq * (we * geometry(scene, qs, pt) / pt.pdf_fwd);
-        if value.is_black() || !scene.visible(qs.p(), surface_normal(scene, qs), pt.p(), None) {
-            return None;
-        }
-        return Some(Connection {
-            value,
-            raster: Some(raster),
-        });
-    }
     let fq = if s == 1 {
         qs.le(scene, pt)
     } else {
         qs.f(pt, TransportMode::Importance)
     };
+    if t == 1 {
+        let w = (qs.p() - pt.p()).normalize_or_zero();
+        let (we, _, raster) = scene.camera.importance(pt.p(), w);
+        let raster = raster?;
+        let value = qs.beta * fq * (we * geometry(scene, qs, pt) / pt.pdf_fwd);
+        return (!value.is_black()).then_some(Connection {
+            value,
+            raster: Some(raster),
+        });
+    }
     let fp = pt.f(qs, TransportMode::Radiance);
     let value = qs.beta * fq * fp * pt.beta * geometry(scene, qs, pt);
-    if value.is_black() || !scene.visible(qs.p(), surface_normal(scene, qs), pt.p(), Some(pt.n())) {
-        return None;
-    }
-    Some(Connection {
+    (!value.is_black()).then_some(Connection {
         value,
         raster: None,
     })

@@ -4,14 +4,18 @@
 //!   sphere instead of the two blocks;
 //! * `caustic` — a glass sphere on a diffuse floor under a small light: a caustic (LSDE paths);
 //! * `door` — a room lit only through a door left ajar into a brightly lit neighbouring room
-//!   (after Veach's "door ajar"); a plastic (layered) table and a rough metal panel in the room.
+//!   (after Veach's "door ajar"); a plastic (layered) table and a rough metal panel in the room;
+//! * `ring` — a faceted mirror ring on a diffuse floor under a small low light, seen from close
+//!   up: the reflection caustic inside the ring fills the frame (after the zoomed ring of the
+//!   practical-MLT paper, Figure 11), paths of the form `L S D E` that BDPT samples poorly and the
+//!   caustic perturbation samples well.
 
 use super::description::*;
 use crate::math::{DMat4, DVec3};
 use crate::spectrum::Rgb;
 
 /// Names of the built-in scenes.
-pub const BUILTIN: [&str; 3] = ["cornell", "caustic", "door"];
+pub const BUILTIN: [&str; 4] = ["cornell", "caustic", "door", "ring"];
 
 /// The built-in scene called `name`.
 pub fn builtin(name: &str) -> Option<SceneDescription> {
@@ -19,6 +23,7 @@ pub fn builtin(name: &str) -> Option<SceneDescription> {
         "cornell" => Some(cornell()),
         "caustic" => Some(caustic()),
         "door" => Some(door()),
+        "ring" => Some(ring()),
         _ => None,
     }
 }
@@ -32,12 +37,28 @@ pub fn look_at(eye: DVec3, target: DVec3, up: DVec3) -> DMat4 {
     DMat4::from_cols(r.extend(0.0), u.extend(0.0), f.extend(0.0), eye.extend(1.0))
 }
 
-struct Builder {
+/// A small programmatic scene builder (what the built-ins are made with): a pinhole camera, then
+/// materials, quads, boxes and spheres in world space.
+///
+/// ```
+/// use light_transport::scene::builtin::SceneBuilder;
+/// use light_transport::math::DVec3;
+/// use light_transport::Rgb;
+/// let mut b = SceneBuilder::new(64, 48, DVec3::new(0.0, 1.0, 3.0), DVec3::ZERO, 40.0);
+/// let white = b.matte(0.7, 0.7, 0.7);
+/// b.quad(DVec3::new(-1.0, 0.0, -1.0), DVec3::Z * 2.0, DVec3::X * 2.0, white, None);
+/// b.quad(DVec3::new(-0.2, 2.0, -0.2), DVec3::X * 0.4, DVec3::Z * 0.4, white, Some(Rgb::splat(10.0)));
+/// let scene = light_transport::scene::Scene::new(&b.finish(), None).unwrap();
+/// assert_eq!(scene.lights.len(), 1);
+/// ```
+pub struct SceneBuilder {
     d: SceneDescription,
 }
 
-impl Builder {
-    fn new(width: usize, height: usize, eye: DVec3, target: DVec3, fov_degrees: f64) -> Self {
+impl SceneBuilder {
+    /// A scene of `width × height` pixels seen by a pinhole camera at `eye` looking at `target`
+    /// (world `+y` up) with a field of view of `fov_degrees` along the shorter image axis.
+    pub fn new(width: usize, height: usize, eye: DVec3, target: DVec3, fov_degrees: f64) -> Self {
         let d = SceneDescription {
             camera: Some(CameraDesc {
                 camera_to_world: look_at(eye, target, DVec3::Y),
@@ -57,19 +78,27 @@ impl Builder {
         Self { d }
     }
 
-    fn material(&mut self, m: MaterialDesc) -> usize {
+    /// The description built so far.
+    pub fn finish(self) -> SceneDescription {
+        self.d
+    }
+
+    /// Add a material; returns its index.
+    pub fn material(&mut self, m: MaterialDesc) -> usize {
         self.d.materials.push(m);
         self.d.materials.len() - 1
     }
 
-    fn matte(&mut self, r: f64, g: f64, b: f64) -> usize {
+    /// Add a Lambertian material of reflectance `(r, g, b)`; returns its index.
+    pub fn matte(&mut self, r: f64, g: f64, b: f64) -> usize {
         self.material(MaterialDesc::Matte {
             kd: RgbTexture::Constant(Rgb::new(r, g, b)),
         })
     }
 
-    /// A quad `p, p + a, p + a + b, p + b` (normal along `a × b`).
-    fn quad(&mut self, p: DVec3, a: DVec3, b: DVec3, material: usize, light: Option<Rgb>) {
+    /// A quad `p, p + a, p + a + b, p + b` (normal along `a × b`), emitting `light` (one-sided,
+    /// along the normal) when given.
+    pub fn quad(&mut self, p: DVec3, a: DVec3, b: DVec3, material: usize, light: Option<Rgb>) {
         self.d.meshes.push(MeshDesc {
             positions: vec![p, p + a, p + a + b, p + b],
             normals: None,
@@ -86,7 +115,7 @@ impl Builder {
     }
 
     /// An axis-aligned box `[lo, hi]` with outward normals.
-    fn cuboid(&mut self, lo: DVec3, hi: DVec3, material: usize) {
+    pub fn cuboid(&mut self, lo: DVec3, hi: DVec3, material: usize) {
         let e = hi - lo;
         let (x, y, z) = (DVec3::X * e.x, DVec3::Y * e.y, DVec3::Z * e.z);
         self.quad(lo, y, x, material, None); // z = lo (−z)
@@ -97,7 +126,8 @@ impl Builder {
         self.quad(lo + y, z, x, material, None); // y = hi (+y)
     }
 
-    fn sphere(&mut self, center: DVec3, radius: f64, material: usize) {
+    /// A sphere.
+    pub fn sphere(&mut self, center: DVec3, radius: f64, material: usize) {
         self.d.spheres.push(SphereDesc {
             center,
             radius,
@@ -110,7 +140,7 @@ impl Builder {
 }
 
 fn cornell() -> SceneDescription {
-    let mut s = Builder::new(
+    let mut s = SceneBuilder::new(
         256,
         256,
         DVec3::new(0.0, 1.0, 6.8),
@@ -180,7 +210,7 @@ fn cornell() -> SceneDescription {
 }
 
 fn caustic() -> SceneDescription {
-    let mut s = Builder::new(
+    let mut s = SceneBuilder::new(
         320,
         240,
         DVec3::new(0.0, 2.2, 4.5),
@@ -224,7 +254,7 @@ fn caustic() -> SceneDescription {
 }
 
 fn door() -> SceneDescription {
-    let mut s = Builder::new(
+    let mut s = SceneBuilder::new(
         320,
         240,
         DVec3::new(-1.6, 1.3, 1.7),
@@ -363,6 +393,45 @@ fn door() -> SceneDescription {
         metal,
         None,
     );
+    s.d
+}
+
+fn ring() -> SceneDescription {
+    let mut s = SceneBuilder::new(
+        256,
+        256,
+        DVec3::new(0.25, 1.6, 1.1),
+        DVec3::new(0.1, 0.0, -0.15),
+        28.0,
+    );
+    let floor = s.matte(0.75, 0.72, 0.68);
+    let black = s.matte(0.0, 0.0, 0.0);
+    let gold = s.material(MaterialDesc::Mirror {
+        kr: Rgb::new(0.95, 0.8, 0.45),
+    });
+    s.quad(
+        DVec3::new(-4.0, 0.0, -4.0),
+        DVec3::Z * 8.0,
+        DVec3::X * 8.0,
+        floor,
+        None,
+    );
+    // 32 facets of a ring of radius 1 and height 0.3, mirror on both sides.
+    let (n, r, h) = (32, 1.0, 0.3);
+    for i in 0..n {
+        let a0 = std::f64::consts::TAU * i as f64 / n as f64;
+        let a1 = std::f64::consts::TAU * (i + 1) as f64 / n as f64;
+        let p0 = DVec3::new(r * a0.cos(), 0.0, r * a0.sin());
+        let p1 = DVec3::new(r * a1.cos(), 0.0, r * a1.sin());
+        s.quad(p0, p1 - p0, DVec3::Y * h, gold, None);
+        s.quad(p0, DVec3::Y * h, p1 - p0, gold, None);
+    }
+    // A small bright light low on the far side (about 30° above the horizon).
+    let c = DVec3::new(-3.0, 1.8, -1.5);
+    let nrm = (DVec3::new(0.0, 0.15, 0.0) - c).normalize();
+    let a = nrm.cross(DVec3::Y).normalize() * 0.2;
+    let b = nrm.cross(a);
+    s.quad(c - (a + b) * 0.5, a, b, black, Some(Rgb::splat(600.0)));
     s.d
 }
 

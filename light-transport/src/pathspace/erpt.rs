@@ -1,0 +1,214 @@
+//! Energy redistribution path tracing (Cline, Talbot & Egbert 2005; overview paper §5.3), the
+//! unbiased variant without post-filters.
+//!
+//! Every pixel sample traces a path-tracing **seed**: a camera subpath through the pixel and one
+//! light endpoint, giving for each length `k` the path that hits an emitter (strategy `s = 0`) and
+//! the next-event path (`s = 1`, for `k ≥ 2`). Each seed path `x̄` carries the energy
+//! `e(x̄) = 1 / Σ_u 1/I(C*_u(x̄))` over the sampled strategies `u` — its balance-heuristic
+//! path-tracing estimate — and starts `⌊e/e_d + ξ⌋` chains. In expectation the chains start with
+//! density `Σ_u p_u · e/e_d = I(f)/e_d`: already the stationary law of the perturbations (which
+//! preserve `I(f)`), so every one of the `N` steps of every chain is distributed as `I(f)/e_d`,
+//! and depositing `e_d/N` per step (by expected values) gives an unbiased image, whatever the
+//! mutations' mixing. `e_d` is set from a deterministic pilot so that a pixel starts
+//! `chains_per_seed` chains on average.
+
+use super::bidirectional::NewPath;
+use super::mutations::{MutationProbabilities, Mutations};
+use super::path::FullPath;
+use super::state::PathState;
+use crate::integrators::{Estimator, Splat};
+use crate::metropolis::SplatRecorder;
+use crate::path::{Vertex, camera_subpath, connect, light_subpath};
+use crate::sampler::IndependentStream;
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+use crate::{Error, Result};
+use mcmc_core::rng::uniform;
+use mcmc_core::{Chain, Stats};
+use std::sync::Mutex;
+
+/// ERPT settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErptSettings {
+    /// Mutations (their probabilities and offsets); default: the perturbations only.
+    pub mutations: Mutations,
+    /// Mutations per chain `N` (default 100, as Cline et al.).
+    pub chain_length: u64,
+    /// Average number of chains a pixel sample starts (sets `e_d`; default 1).
+    pub chains_per_seed: f64,
+    /// Pixel samples of the pilot that estimates the mean seed energy (default 4096).
+    pub pilot: usize,
+}
+
+impl ErptSettings {
+    /// Defaults for paths of at most `max_edges` edges.
+    pub fn new(max_edges: usize) -> Self {
+        Self {
+            mutations: Mutations {
+                max_edges,
+                importance: Default::default(),
+                probabilities: MutationProbabilities::perturbations(),
+                perturbation: Default::default(),
+            },
+            chain_length: 100,
+            chains_per_seed: 1.0,
+            pilot: 4096,
+        }
+    }
+}
+
+/// The ERPT estimator (splats only; one pass = one seed per pixel).
+#[derive(Debug)]
+pub struct Erpt {
+    /// Settings.
+    pub settings: ErptSettings,
+    /// The energy quantum `e_d`.
+    pub quantum: f64,
+    stats: Mutex<(Stats, u64)>,
+}
+
+const PILOT_STREAM: u64 = 0xE4F7;
+
+impl Erpt {
+    /// Set up ERPT on `scene`: validates the settings and runs the pilot for `e_d`.
+    pub fn new(scene: &Scene, settings: ErptSettings) -> Result<Self> {
+        let m = &settings.mutations;
+        m.probabilities.validate()?;
+        m.perturbation.validate()?;
+        if m.max_edges == 0 || settings.chain_length == 0 || settings.pilot == 0 {
+            return Err(Error::InvalidParameter {
+                name: "erpt".into(),
+                reason: "need max depth ≥ 1, chain length ≥ 1 and pilot ≥ 1".into(),
+            });
+        }
+        if !(settings.chains_per_seed > 0.0 && settings.chains_per_seed.is_finite()) {
+            return Err(Error::InvalidParameter {
+                name: "erpt chains per seed".into(),
+                reason: format!("must be positive, got {}", settings.chains_per_seed),
+            });
+        }
+        let npix = scene.camera.width * scene.camera.height;
+        let mut total = 0.0;
+        let mut seeds = Vec::new();
+        for i in 0..settings.pilot {
+            let mut stream =
+                IndependentStream::new(mcmc_core::rng::substream(0, PILOT_STREAM, i as u64));
+            let pixel = ((uniform(&mut stream.rng) * npix as f64) as usize).min(npix - 1);
+            seed_paths(scene, m, pixel, &mut stream, &mut seeds);
+            total += seeds.iter().map(|(_, e)| e).sum::<f64>();
+        }
+        let mean = total / settings.pilot as f64;
+        if !(mean > 0.0 && mean.is_finite()) {
+            return Err(Error::InvalidScene(format!(
+                "no light reached the camera in {} path-traced pilot samples: nothing to render",
+                settings.pilot
+            )));
+        }
+        Ok(Self {
+            settings,
+            quantum: mean / settings.chains_per_seed,
+            stats: Mutex::new((Stats::default(), 0)),
+        })
+    }
+
+    /// Acceptance per mutation kind and the number of chains run so far.
+    pub fn statistics(&self) -> (Stats, u64) {
+        match self.stats.lock() {
+            Ok(g) => g.clone(),
+            Err(e) => e.into_inner().clone(),
+        }
+    }
+}
+
+/// The seed paths of one path-tracing sample in `pixel`, with their energies.
+pub fn seed_paths(
+    scene: &Scene,
+    m: &Mutations,
+    pixel: usize,
+    stream: &mut IndependentStream,
+    out: &mut Vec<(PathState, f64)>,
+) {
+    out.clear();
+    let (mut cam, mut light): (Vec<Vertex>, Vec<Vertex>) = (Vec::new(), Vec::new());
+    camera_subpath(scene, stream, m.max_edges + 1, Some(pixel), &mut cam);
+    light_subpath(scene, stream, 1, &mut light);
+    let mut path = FullPath::default();
+    for t in 2..cam.len() + 1 {
+        for s in 0..=1usize {
+            let k = s + t - 1;
+            if k > m.max_edges || t > cam.len() || s > light.len() {
+                continue;
+            }
+            if s == 1 && connect(scene, &light, &cam, 1, t).is_none() {
+                continue;
+            }
+            if path.set_from_subpaths(scene, &light, &cam, s, t).is_none() {
+                continue;
+            }
+            let mut state = PathState {
+                path: path.clone(),
+                ..Default::default()
+            };
+            if !state.evaluate(scene, m.importance, 1.0) {
+                continue;
+            }
+            // The sampled strategies: s = 0 always, s = 1 for paths of two or more edges.
+            let u_max = if k >= 2 { 2 } else { 1 };
+            let inv = state.inverse_sum(0, u_max);
+            if inv > 0.0 && state.strategy_importance(s) > 0.0 {
+                out.push((state, 1.0 / inv));
+            }
+        }
+    }
+}
+
+impl Estimator for Erpt {
+    fn sample(
+        &self,
+        scene: &Scene,
+        pixel: usize,
+        stream: &mut IndependentStream,
+        splats: &mut Vec<Splat>,
+    ) -> Rgb {
+        let m = &self.settings.mutations;
+        let n = self.settings.chain_length;
+        let mut seeds = Vec::new();
+        seed_paths(scene, m, pixel, stream, &mut seeds);
+        if seeds.is_empty() {
+            return Rgb::BLACK;
+        }
+        let np = NewPath::uniform(m.max_edges);
+        let mut stats = Stats::default();
+        let mut chains = 0;
+        let mut rec = SplatRecorder {
+            splats,
+            b: self.quantum / n as f64,
+        };
+        for (state, e) in seeds {
+            let count = (e / self.quantum + uniform(&mut stream.rng)).floor() as u64;
+            for _ in 0..count {
+                let Ok(mut chain) = Chain::with_density(state.clone(), 0.0) else {
+                    continue;
+                };
+                m.run(scene, &np, &mut chain, n, &mut stream.rng, &mut rec);
+                stats.merge(&chain.stats);
+                chains += 1;
+            }
+        }
+        if chains > 0
+            && let Ok(mut g) = self.stats.lock()
+        {
+            g.0.merge(&stats);
+            g.1 += chains;
+        }
+        Rgb::BLACK
+    }
+
+    fn has_pixel_estimate(&self) -> bool {
+        false
+    }
+
+    fn splats(&self) -> bool {
+        true
+    }
+}

@@ -1,0 +1,98 @@
+//! Path-space Metropolis light transport (Veach & Guibas 1997) on the shared Metropolis driver.
+//!
+//! Bootstrap and seeding: group `g` holds paths of `k = g + 1` edges made by a uniformly chosen
+//! bidirectional strategy; a sample's importance weight is `I(f)/q_k = (k + 1) I(f) / Σ_s p_s`, so
+//! the driver's per-group normalisations `b_k` are the image energy per path length, their sum
+//! `b` normalises the image, and resampling the whole population in proportion to the weights
+//! seeds the chains without start-up bias. Chains then move freely between lengths (bidirectional
+//! and new-path mutations); the new-path mutation picks lengths in proportion to `b_k`.
+
+use super::bidirectional::NewPath;
+use super::mutations::Mutations;
+use super::state::PathState;
+use crate::metropolis::Method;
+use crate::sampler::IndependentStream;
+use crate::scene::Scene;
+use crate::{Error, Result};
+use mcmc_core::kernel::Observer;
+use mcmc_core::{Chain, ChainRng};
+use std::sync::RwLock;
+
+/// Path-space MLT.
+#[derive(Debug)]
+pub struct PathMlt {
+    /// The mutations.
+    pub mutations: Mutations,
+    new_path: RwLock<NewPath>,
+}
+
+impl PathMlt {
+    /// Path-space MLT with `mutations`; errors on invalid probabilities or offsets.
+    pub fn new(mutations: Mutations) -> Result<Self> {
+        mutations.probabilities.validate()?;
+        mutations.perturbation.validate()?;
+        if mutations.max_edges == 0 {
+            return Err(Error::InvalidParameter {
+                name: "max depth".into(),
+                reason: "path-space MLT needs paths of at least one edge".into(),
+            });
+        }
+        Ok(Self {
+            new_path: RwLock::new(NewPath::uniform(mutations.max_edges)),
+            mutations,
+        })
+    }
+
+    /// The current new-path length distribution.
+    pub fn new_path(&self) -> NewPath {
+        self.new_path
+            .read()
+            .map(|g| g.clone())
+            .unwrap_or_else(|e| e.into_inner().clone())
+    }
+}
+
+impl Method for PathMlt {
+    type State = PathState;
+
+    fn groups(&self) -> usize {
+        self.mutations.max_edges
+    }
+
+    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> PathState {
+        let mut stream = IndependentStream::new(mcmc_core::rng::stream(seed, 0));
+        let mut state = PathState::default();
+        NewPath::sample(
+            scene,
+            self.mutations.importance,
+            g + 1,
+            &mut stream,
+            &mut state,
+        );
+        state
+    }
+
+    fn bootstrap_done(&self, group_normalisation: &[f64]) {
+        let np = NewPath::from_energies(group_normalisation);
+        match self.new_path.write() {
+            Ok(mut g) => *g = np,
+            Err(e) => *e.into_inner() = np,
+        }
+    }
+
+    fn mutate<O: Observer<PathState>>(
+        &self,
+        scene: &Scene,
+        chain: &mut Chain<PathState>,
+        n: u64,
+        rng: &mut ChainRng,
+        observer: &mut O,
+    ) {
+        let np = self.new_path();
+        self.mutations.run(scene, &np, chain, n, rng, observer);
+    }
+
+    fn kinds(&self) -> Vec<String> {
+        Mutations::kinds()
+    }
+}

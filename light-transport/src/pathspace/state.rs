@@ -1,0 +1,91 @@
+//! The chain state of path-space MLT: a full path, the scalar importance `I(C*_s)` of each of its
+//! strategies (what every mutation's acceptance ratio is made of), and the splat it records.
+//!
+//! The target of the chains is `I(f(x̄))` in path space. A state records the colour
+//! `f / Σ_s p_s` (the balance-heuristic estimate of the path), whose direction is that of `f`:
+//! the driver scales it by `b / I(colour)`, so only its direction matters.
+
+use super::path::{FullPath, Scratch};
+use crate::metropolis::{Contribution, ImportanceKind, Recordable};
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+use std::cell::RefCell;
+
+/// A path-space chain state.
+#[derive(Clone, Debug, Default)]
+pub struct PathState {
+    /// The path.
+    pub path: FullPath,
+    /// `I(C*_s)` for `s = 0 … k` (0 where strategy `s` cannot produce the path).
+    pub strategy: Vec<f64>,
+    /// Splat and importance.
+    pub contribution: Contribution,
+}
+
+impl Recordable for PathState {
+    fn contribution(&self) -> &Contribution {
+        &self.contribution
+    }
+}
+
+thread_local! {
+    static SCRATCH: RefCell<(Scratch, Vec<Option<Rgb>>)> = RefCell::new(Default::default());
+}
+
+impl PathState {
+    /// Evaluate the path: per-strategy importances and the recorded colour `scale · f / Σ_s p_s`.
+    /// Returns whether the path carries light (some strategy has a positive contribution).
+    pub fn evaluate(&mut self, scene: &Scene, importance: ImportanceKind, scale: f64) -> bool {
+        self.strategy.clear();
+        self.contribution.splats.clear();
+        self.contribution.importance = 0.0;
+        let best = SCRATCH.with(|cell| {
+            let (scratch, values) = &mut *cell.borrow_mut();
+            self.path.strategies(scene, scratch, values);
+            let mut best: Option<(Rgb, f64)> = None;
+            for v in values.iter() {
+                let i = v.map_or(0.0, |c| importance.of(c));
+                let i = if i.is_finite() && i > 0.0 { i } else { 0.0 };
+                self.strategy.push(i);
+                if let Some(c) = v
+                    && i > 0.0
+                    && best.is_none_or(|(_, b)| i > b)
+                {
+                    best = Some((*c, i));
+                }
+            }
+            best
+        });
+        let inverse_sum = self.inverse_sum(0, self.strategy.len());
+        let (Some((c, i)), Some(raster)) = (best, self.path.raster(scene)) else {
+            return false;
+        };
+        if !(inverse_sum > 0.0) {
+            return false;
+        }
+        // f / Σ_s p_s = C*_u / (I(C*_u) Σ_s 1/I(C*_s)) for any valid u.
+        let colour = c * (scale / (i * inverse_sum));
+        if !colour.is_finite() {
+            return false;
+        }
+        self.contribution.splats.push((raster, colour));
+        self.contribution.importance = importance.of(colour);
+        true
+    }
+
+    /// `Σ 1/I(C*_s)` over strategies `s ∈ [from, to)` that can produce the path (0 if none).
+    pub fn inverse_sum(&self, from: usize, to: usize) -> f64 {
+        self.strategy
+            .get(from..to.min(self.strategy.len()))
+            .unwrap_or(&[])
+            .iter()
+            .filter(|&&i| i > 0.0)
+            .map(|&i| 1.0 / i)
+            .sum()
+    }
+
+    /// `I(C*_s)` (0 when invalid or out of range).
+    pub fn strategy_importance(&self, s: usize) -> f64 {
+        self.strategy.get(s).copied().unwrap_or(0.0)
+    }
+}

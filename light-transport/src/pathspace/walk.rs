@@ -1,0 +1,192 @@
+//! Geometric walks for path-space mutations: tracing one edge, sampling the direction that leaves
+//! a subpath's last vertex, new endpoints, and the random offsets of the perturbations (pixel
+//! offsets and angular offsets exponentially distributed between two radii — practical-MLT paper,
+//! appendices B and C — here with exact rotations, so that the offset density depends only on the
+//! angle between the two directions and is symmetric).
+//!
+//! Walks here only place vertices (position, BSDF, delta flag); throughputs and densities are
+//! recomputed by [`super::path::retrace`] when the path is evaluated.
+
+use crate::bsdf::TransportMode;
+use crate::geometry::{Ray, SurfacePoint, offset_origin};
+use crate::math::{DVec3, Frame};
+use crate::path::{Vertex, VertexKind};
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+use mcmc_core::ChainRng;
+use mcmc_core::rng::uniform;
+use std::f64::consts::TAU;
+
+/// Trace the ray leaving vertex `from` in unit direction `w`; the first hit as a scattering vertex
+/// (`wo = −w`, its BSDF, not delta).
+pub fn trace(scene: &Scene, from: &Vertex, w: DVec3) -> Option<Vertex> {
+    let o = if from.on_surface(scene) {
+        offset_origin(from.p(), from.n(), w)
+    } else {
+        from.p()
+    };
+    let hit = scene.intersect(&Ray::new(o, w))?;
+    Some(Vertex {
+        kind: VertexKind::Surface,
+        bsdf: scene.bsdf(&hit.point).ok(),
+        point: hit.point,
+        wo: -w,
+        beta: Rgb::BLACK,
+        delta: false,
+        pdf_fwd: 0.0,
+        pdf_rev: 0.0,
+    })
+}
+
+/// Point `wo` of the last vertex of `sub` (a subpath in walk order) at its predecessor.
+fn orient_last(sub: &mut [Vertex]) {
+    let n = sub.len();
+    if n >= 2 {
+        sub[n - 1].wo = (sub[n - 2].p() - sub[n - 1].p()).normalize_or_zero();
+    }
+}
+
+/// Sample the direction leaving the last vertex of `sub` as a random walk in `mode` would: the
+/// emission distribution of a light endpoint, a uniform image position for a lens endpoint, the
+/// BSDF otherwise (recording in the vertex whether a delta lobe was chosen).
+pub fn sample_direction(
+    scene: &Scene,
+    sub: &mut [Vertex],
+    mode: TransportMode,
+    rng: &mut ChainRng,
+) -> Option<DVec3> {
+    orient_last(sub);
+    let v = sub.last_mut()?;
+    match v.kind {
+        VertexKind::Light { light } => {
+            let u = [uniform(rng), uniform(rng)];
+            let (w, _) = scene.lights[light as usize].sample_direction(v.n(), u)?;
+            Some(w)
+        }
+        VertexKind::Camera => {
+            let raster = [
+                uniform(rng) * scene.camera.width as f64,
+                uniform(rng) * scene.camera.height as f64,
+            ];
+            Some(scene.camera.ray_through(v.p(), raster)?.ray.d)
+        }
+        VertexKind::Surface => {
+            let b = v.bsdf.as_ref()?;
+            let u_lobe = uniform(rng);
+            let u = [uniform(rng), uniform(rng)];
+            let s = b.sample(v.wo, u_lobe, u, mode)?;
+            if !(s.pdf > 0.0) || s.f.is_black() {
+                return None;
+            }
+            v.delta = s.delta;
+            Some(s.wi)
+        }
+    }
+}
+
+/// Extend subpath `sub` by `n` vertices; `false` when the walk ends early (the ray escapes, or a
+/// BSDF cannot be sampled).
+pub fn extend(
+    scene: &Scene,
+    sub: &mut Vec<Vertex>,
+    n: usize,
+    mode: TransportMode,
+    rng: &mut ChainRng,
+) -> bool {
+    for _ in 0..n {
+        let Some(w) = sample_direction(scene, sub, mode, rng) else {
+            return false;
+        };
+        let Some(v) = sub.last().and_then(|last| trace(scene, last, w)) else {
+            return false;
+        };
+        sub.push(v);
+    }
+    orient_last(sub);
+    true
+}
+
+/// A new light endpoint: a light chosen by power and a uniform point on it.
+pub fn light_endpoint(scene: &Scene, rng: &mut ChainRng) -> Option<Vertex> {
+    let (li, _) = scene.light_distribution.sample(uniform(rng))?;
+    let u = [uniform(rng), uniform(rng)];
+    let (point, _) = scene.lights[li].sample_point(&scene.bvh.primitives, u)?;
+    Some(endpoint(VertexKind::Light { light: li as u32 }, point))
+}
+
+/// A new lens endpoint: a uniform point on the lens.
+pub fn lens_endpoint(scene: &Scene, rng: &mut ChainRng) -> Option<Vertex> {
+    let u = [uniform(rng), uniform(rng)];
+    let cs = scene.camera.sample_ray([0.5, 0.5], u);
+    Some(endpoint(
+        VertexKind::Camera,
+        SurfacePoint {
+            p: cs.ray.o,
+            n: scene.camera.forward(),
+            uv: [0.0; 2],
+            dpdu: DVec3::X,
+            primitive: u32::MAX,
+        },
+    ))
+}
+
+fn endpoint(kind: VertexKind, point: SurfacePoint) -> Vertex {
+    Vertex {
+        kind,
+        point,
+        wo: DVec3::ZERO,
+        bsdf: None,
+        beta: Rgb::BLACK,
+        delta: false,
+        pdf_fwd: 0.0,
+        pdf_rev: 0.0,
+    }
+}
+
+/// A radius exponentially distributed between `r1` and `r2` (`ln r` uniform): the pixel and
+/// angular offsets of the practical-MLT paper.
+pub fn exponential_radius(r1: f64, r2: f64, rng: &mut ChainRng) -> f64 {
+    r2 * (-(r2 / r1).ln() * uniform(rng)).exp()
+}
+
+/// Density of [`exponential_radius`] at `r` (0 outside `[r1, r2]`).
+pub fn exponential_radius_pdf(r: f64, r1: f64, r2: f64) -> f64 {
+    if r >= r1 && r <= r2 {
+        1.0 / (r * (r2 / r1).ln())
+    } else {
+        0.0
+    }
+}
+
+/// Move a raster position by a distance exponentially distributed in `[r1, r2]` pixels in a
+/// uniform direction (density in the image plane `p(r) / (2π r)`, symmetric).
+pub fn pixel_offset(raster: [f64; 2], r1: f64, r2: f64, rng: &mut ChainRng) -> [f64; 2] {
+    let phi = TAU * uniform(rng);
+    let r = exponential_radius(r1, r2, rng);
+    [raster[0] + r * phi.cos(), raster[1] + r * phi.sin()]
+}
+
+/// Rotate unit direction `w` by an angle exponentially distributed in `[θ1, θ2]` about a uniform
+/// axis perpendicular to it. The density in solid angle, `p(θ) / (2π sin θ)`, depends only on the
+/// angle between the two directions, so the move is symmetric.
+pub fn angular_offset(w: DVec3, theta1: f64, theta2: f64, rng: &mut ChainRng) -> DVec3 {
+    let phi = TAU * uniform(rng);
+    let theta = exponential_radius(theta1, theta2, rng);
+    let local = DVec3::new(
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        theta.cos(),
+    );
+    Frame::from_normal(w).to_world(local).normalize()
+}
+
+/// Solid-angle density of [`angular_offset`] moving `a` to `b`.
+pub fn angular_offset_pdf(a: DVec3, b: DVec3, theta1: f64, theta2: f64) -> f64 {
+    let theta = a.cross(b).length().atan2(a.dot(b));
+    let s = theta.sin();
+    if s > 0.0 {
+        exponential_radius_pdf(theta, theta1, theta2) / (TAU * s)
+    } else {
+        0.0
+    }
+}
