@@ -11,8 +11,11 @@
 //! Statistical verdicts: Welch t-tests per pixel or 6×6 block over independent runs,
 //! Holm-corrected, α = 1e-4 per comparison; seeds fixed.
 
+mod common;
+
+use common::{ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, min_p};
 use light_transport::film::{Film, Image};
-use light_transport::integrators::{Bdpt, Budget as PassBudget, render};
+use light_transport::integrators::Bdpt;
 use light_transport::metropolis::{
     self, Budget, Contribution, ImportanceKind, Method, MetropolisSettings, Mmlt, PrimaryState,
     Pssmlt, Recordable, Seeding, mutate_primary,
@@ -20,51 +23,10 @@ use light_transport::metropolis::{
 use light_transport::path::{MisHeuristic, WalkSettings};
 use light_transport::scene::{Scene, builtin};
 use light_transport::spectrum::Rgb;
-use mcmc_core::balance::holm;
 use mcmc_core::kernel::Observer;
 use mcmc_core::primary_sample::{Kelemen, PrimarySample};
 use mcmc_core::{Chain, ChainRng};
-use statrs::distribution::{ContinuousCDF, StudentsT};
 use std::sync::atomic::{AtomicU64, Ordering};
-
-const ALPHA: f64 = 1e-4;
-
-/// Welch t-test of two sets of independent replicate vectors, per component, Holm-corrected: the
-/// smallest adjusted p-value. `b` may have zero variance (an exact reference).
-fn min_p(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-    let var = |v: &[f64], m: f64| {
-        if v.len() > 1 {
-            v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64
-        } else {
-            0.0
-        }
-    };
-    let mut p = Vec::new();
-    for j in 0..a[0].len() {
-        let va: Vec<f64> = a.iter().map(|r| r[j]).collect();
-        let vb: Vec<f64> = b.iter().map(|r| r[j]).collect();
-        let (ma, mb) = (mean(&va), mean(&vb));
-        let (sa, sb) = (
-            var(&va, ma) / va.len() as f64,
-            var(&vb, mb) / vb.len() as f64,
-        );
-        if sa + sb == 0.0 {
-            p.push(if (ma - mb).abs() < 1e-12 { 1.0 } else { 0.0 });
-            continue;
-        }
-        let t = (ma - mb).abs() / (sa + sb).sqrt();
-        let df = (sa + sb).powi(2)
-            / (sa * sa / (va.len() as f64 - 1.0).max(1.0)
-                + if vb.len() > 1 {
-                    sb * sb / (vb.len() as f64 - 1.0)
-                } else {
-                    0.0
-                });
-        p.push(2.0 * StudentsT::new(0.0, 1.0, df.max(1.0)).unwrap().sf(t));
-    }
-    holm(&p).into_iter().fold(1.0, f64::min)
-}
 
 // ---------------------------------------------------------------------------------------------
 // A 1D toy: pixel j of a 32×1 film should equal the mean of f over [j/32, (j+1)/32).
@@ -213,43 +175,6 @@ fn a_sampler_that_cannot_replay_its_seeds_is_refused() {
 
 // ---------------------------------------------------------------------------------------------
 // Convergence to BDPT on the built-in scenes.
-
-const W: usize = 36;
-const H: usize = 30;
-const BLOCK: usize = 6;
-const MAX_EDGES: usize = 6;
-
-fn blocks(img: &Image) -> Vec<f64> {
-    let bw = W / BLOCK;
-    let mut out = vec![0.0; bw * (H / BLOCK)];
-    for (i, p) in img.pixels.iter().enumerate() {
-        out[(i / W / BLOCK) * bw + i % W / BLOCK] += (p[0] + p[1] + p[2]) / (BLOCK * BLOCK) as f64;
-    }
-    out
-}
-
-fn bdpt_batches(scene: &Scene) -> Vec<Vec<f64>> {
-    let bdpt = Bdpt {
-        walk: WalkSettings {
-            max_edges: MAX_EDGES,
-        },
-        heuristic: MisHeuristic::Power,
-    };
-    (0..16)
-        .map(|b| {
-            blocks(&Image::from_film(
-                &render(
-                    scene,
-                    &bdpt,
-                    PassBudget::SamplesPerPixel(8),
-                    500 + b,
-                    |_, _| true,
-                )
-                .0,
-            ))
-        })
-        .collect()
-}
 
 fn mlt_runs<M: Method>(scene: &Scene, m: &M, runs: u64) -> Vec<Vec<f64>> {
     (0..runs)

@@ -122,7 +122,14 @@ impl fmt::Display for StatsTable<'_> {
             "{:<28} {:>12} {:>12} {:>9} {:>9} {:>12} {:>9}",
             "move", "proposed", "accepted", "rate", "invalid", "n/applicable", "failed"
         )?;
-        for (i, k) in self.stats.kinds.iter().enumerate() {
+        // Kinds never proposed (e.g. switched off by their probability) are left out.
+        for (i, k) in self
+            .stats
+            .kinds
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| k.proposed > 0)
+        {
             let name = self.names.get(i).map(String::as_str).unwrap_or("?");
             writeln!(
                 f,

@@ -17,6 +17,12 @@ pub enum Algo {
     Pssmlt,
     /// Multiplexed MLT (Hachisuka et al.): one strategy per sample, chains per path length.
     Mmlt,
+    /// Path-space MLT (Veach & Guibas): bidirectional, lens-subpath, perturbation and new-path
+    /// mutations.
+    Mlt,
+    /// Energy redistribution path tracing (Cline et al.): short perturbation chains from
+    /// path-traced seeds.
+    Erpt,
 }
 
 impl Algo {
@@ -28,6 +34,8 @@ impl Algo {
             Algo::Bdpt => "bdpt",
             Algo::Pssmlt => "pssmlt",
             Algo::Mmlt => "mmlt",
+            Algo::Mlt => "mlt",
+            Algo::Erpt => "erpt",
         }
     }
 }

@@ -39,9 +39,12 @@ pub struct CompareArgs {
     /// Seed, depth, resolution, exposure, MIS.
     #[command(flatten)]
     pub options: RenderOptions,
-    /// Metropolis options (pssmlt, mmlt).
+    /// Metropolis options (pssmlt, mmlt, mlt).
     #[command(flatten)]
     pub metropolis: MetropolisArgs,
+    /// Path-space options (mlt, erpt).
+    #[command(flatten)]
+    pub pathspace: super::pathspace::PathSpaceArgs,
     /// Output folder. Default: `out/compare-<scene>`.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
@@ -166,6 +169,9 @@ fn track_metropolis<M: Method>(
         100.0 * acc.acceptance_rate(),
         s.mutations as f64 / s.chain_time.as_secs_f64().max(1e-9) / 1e6
     );
+    if s.kinds.len() > 1 {
+        eprint!("{}", s.stats.table(&s.kinds));
+    }
     Ok(Image::from_film(&film))
 }
 
@@ -271,6 +277,28 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
                 &reference,
                 &mut rows,
             )?,
+            Algo::Mlt => track_metropolis(
+                &scene,
+                &a.pathspace.mlt(&common, &a.metropolis)?,
+                &a,
+                "mlt",
+                &reference,
+                &mut rows,
+            )?,
+            Algo::Erpt => {
+                let e = a.pathspace.erpt(&scene, &common, &a.metropolis)?;
+                let img = track(&scene, &e, &a, "erpt", &reference, &mut rows)?;
+                let (stats, chains) = e.statistics();
+                let names = light_transport::pathspace::Mutations::kinds();
+                eprintln!(
+                    "  erpt: e_d = {:.3e}, {chains} chains of {} mutations, acceptance {:.1}%\n{}",
+                    e.quantum,
+                    e.settings.chain_length,
+                    100.0 * stats.total().acceptance_rate(),
+                    stats.table(&names)
+                );
+                img
+            }
         };
         write_outputs(
             &img,

@@ -6,6 +6,7 @@ mod diff;
 mod duration;
 mod info;
 mod metropolis;
+mod pathspace;
 mod plot;
 mod reference;
 mod render;
@@ -44,7 +45,7 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Render a scene (a pbrt-v3 file or a built-in scene: cornell, caustic, door).
+    /// Render a scene (a pbrt-v3 file or a built-in scene: cornell, caustic, door, ring).
     Render(render::RenderArgs),
     /// Render a long reference image with an unbiased algorithm (default: BDPT, 1024 spp).
     Reference(reference::ReferenceArgs),

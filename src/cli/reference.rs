@@ -53,6 +53,7 @@ pub fn run(mut a: ReferenceArgs) -> Result<(), CliError> {
         algo: a.algo,
         options: a.options,
         metropolis: super::metropolis::MetropolisArgs::default_values(),
+        pathspace: super::pathspace::PathSpaceArgs::default_values(),
         write_every: Duration::from_secs(60),
         threads: None,
         quiet: false,

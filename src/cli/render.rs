@@ -5,6 +5,7 @@ use super::CliError;
 use super::algo::{self, Algo, RenderOptions};
 use super::duration::parse_duration;
 use super::metropolis::{MetropolisArgs, print_stats, run_method};
+use super::pathspace::{PathSpaceArgs, print_erpt_stats};
 use super::scene_arg;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -19,7 +20,7 @@ use std::time::{Duration, Instant};
 /// Options of `render`.
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Scene: a built-in name (cornell, caustic, door) or a pbrt-v3 file.
+    /// Scene: a built-in name (cornell, caustic, door, ring) or a pbrt-v3 file.
     #[arg(default_value = "cornell")]
     pub scene: String,
     /// Algorithm.
@@ -42,9 +43,12 @@ pub struct RenderArgs {
     /// Seed, depth, resolution, exposure, MIS.
     #[command(flatten)]
     pub options: RenderOptions,
-    /// Metropolis options (pssmlt, mmlt).
+    /// Metropolis options (pssmlt, mmlt, mlt).
     #[command(flatten)]
     pub metropolis: MetropolisArgs,
+    /// Path-space options (mlt, erpt).
+    #[command(flatten)]
+    pub pathspace: PathSpaceArgs,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -162,6 +166,7 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
         }
     };
     let mut mlt_stats = None;
+    let mut erpt = None;
     let (film, stats) = match a.algo {
         Algo::Pt => run_integrator(
             &scene,
@@ -187,7 +192,13 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
             a.quiet,
             every,
         ),
-        Algo::Pssmlt | Algo::Mmlt => {
+        Algo::Erpt => {
+            let e = a.pathspace.erpt(&scene, &common, &a.metropolis)?;
+            let out = run_integrator(&scene, &e, budget, a.options.seed, a.quiet, every);
+            erpt = Some(e);
+            out
+        }
+        Algo::Pssmlt | Algo::Mmlt | Algo::Mlt => {
             let mb = match budget {
                 Budget::SamplesPerPixel(n) => metropolis::Budget::MutationsPerPixel(n as f64),
                 Budget::Time(t) => metropolis::Budget::Time(t),
@@ -198,22 +209,28 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
                 every(film);
                 true
             };
-            let (film, s) = if a.algo == Algo::Pssmlt {
-                run_method(
+            let (film, s) = match a.algo {
+                Algo::Pssmlt => run_method(
                     &scene,
                     &algo::pssmlt(&common, &a.metropolis)?,
                     &settings,
                     a.quiet,
                     cb,
-                )?
-            } else {
-                run_method(
+                )?,
+                Algo::Mmlt => run_method(
                     &scene,
                     &algo::mmlt(&common, &a.metropolis)?,
                     &settings,
                     a.quiet,
                     cb,
-                )?
+                )?,
+                _ => run_method(
+                    &scene,
+                    &a.pathspace.mlt(&common, &a.metropolis)?,
+                    &settings,
+                    a.quiet,
+                    cb,
+                )?,
             };
             let pixels = (scene.camera.width * scene.camera.height) as u64;
             let rs = RenderStats {
@@ -275,6 +292,9 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
     println!("discarded  {} non-finite samples", stats.discarded);
     if let Some(s) = &mlt_stats {
         print_stats(s, (scene.camera.width * scene.camera.height) as f64);
+    }
+    if let Some(e) = &erpt {
+        print_erpt_stats(e, (scene.camera.width * scene.camera.height) as f64);
     }
     println!("wrote      {} and {}", exr.display(), png.display());
     Ok(())
