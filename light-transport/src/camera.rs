@@ -283,13 +283,17 @@ impl Camera {
             crate::math::clamp_unit(raster[0] / self.width as f64),
             crate::math::clamp_unit(raster[1] / self.height as f64),
         ];
-        let lens = if self.lens_radius > 0.0 {
+        Some((film, self.invert_lens(p, free)))
+    }
+
+    /// The lens numbers of world lens point `p` (for a pinhole they are free: `free`).
+    pub fn invert_lens(&self, p: DVec3, free: [f64; 2]) -> [f64; 2] {
+        if self.lens_radius > 0.0 {
             let o = self.to_camera.transform_point3(p);
             invert_concentric_disk([o.x / self.lens_radius, o.y / self.lens_radius])
         } else {
             free
-        };
-        Some((film, lens))
+        }
     }
 
     /// Raster position of a world point seen through the lens centre (for tests and info).

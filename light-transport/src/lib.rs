@@ -6,6 +6,7 @@
 pub mod accel;
 pub mod bsdf;
 pub mod camera;
+pub mod cmlt;
 pub mod error;
 pub mod film;
 pub mod geometry;

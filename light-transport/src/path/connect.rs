@@ -18,8 +18,13 @@ pub struct Connection {
     pub raster: Option<[f64; 2]>,
 }
 
+/// Cosines below this make a connection tangent to a surface: its side (reflection or
+/// transmission) would be decided by rounding, so it is given no contribution (a set of measure
+/// zero; keeping it would make paths depend on the last bit of their numbers).
+pub const GRAZING_COSINE: f64 = 1e-9;
+
 /// Geometry term between two vertices (cosines only where a vertex lies on a surface, and the lens
-/// cosine for the camera endpoint).
+/// cosine for the camera endpoint); 0 for a connection tangent to a surface ([`GRAZING_COSINE`]).
 pub fn geometry(scene: &Scene, a: &Vertex, b: &Vertex) -> f64 {
     let d = b.p() - a.p();
     let d2 = d.length_squared();
@@ -34,7 +39,11 @@ pub fn geometry(scene: &Scene, a: &Vertex, b: &Vertex) -> f64 {
             _ => 1.0,
         }
     };
-    cos(a, w) * cos(b, w) / d2
+    let (ca, cb) = (cos(a, w), cos(b, w));
+    if ca < GRAZING_COSINE || cb < GRAZING_COSINE {
+        return 0.0;
+    }
+    ca * cb / d2
 }
 
 /// Evaluate strategy `(s, t)`; `None` when it contributes nothing (occluded, not connectible,

@@ -314,8 +314,9 @@ fn door() -> SceneDescription {
         wall,
         None,
     );
-    // Wall z = −2 with a doorway x ∈ [0.3, 1.1], y ∈ [0, 2]: three pieces facing +z, and their
-    // backs facing −z (room B's side).
+    // Wall z = −2 with a doorway x ∈ [0.3, 1.1], y ∈ [0, 2]: three pieces, one quad each for
+    // both rooms (Lambertian surfaces reflect on both sides; a second, coincident quad for room
+    // B's side would make the closest hit ambiguous, and paths not replayable).
     for (lo, hi) in [
         ((-2.0, 0.0), (0.3, 2.5)),
         ((1.1, 0.0), (2.0, 2.5)),
@@ -324,7 +325,6 @@ fn door() -> SceneDescription {
         let p = DVec3::new(lo.0, lo.1, -2.0);
         let (a, b) = (DVec3::X * (hi.0 - lo.0), DVec3::Y * (hi.1 - lo.1));
         s.quad(p, a, b, wall, None);
-        s.quad(p, b, a, wall, None);
     }
     // The door: a thin slab hinged at x = 1.1, turned 8° into room B.
     let angle = 8f64.to_radians();
@@ -416,7 +416,8 @@ fn ring() -> SceneDescription {
         floor,
         None,
     );
-    // 32 facets of a ring of radius 1 and height 0.3, mirror on both sides.
+    // 32 facets of a ring of radius 1 and height 0.3; the mirror reflects on both sides (one quad
+    // per facet: coincident quads would make the closest hit ambiguous).
     let (n, r, h) = (32, 1.0, 0.3);
     for i in 0..n {
         let a0 = std::f64::consts::TAU * i as f64 / n as f64;
@@ -424,7 +425,6 @@ fn ring() -> SceneDescription {
         let p0 = DVec3::new(r * a0.cos(), 0.0, r * a0.sin());
         let p1 = DVec3::new(r * a1.cos(), 0.0, r * a1.sin());
         s.quad(p0, p1 - p0, DVec3::Y * h, gold, None);
-        s.quad(p0, DVec3::Y * h, p1 - p0, gold, None);
     }
     // A small bright light low on the far side (about 30° above the horizon).
     let c = DVec3::new(-3.0, 1.8, -1.5);
