@@ -23,6 +23,8 @@ pub enum Algo {
     /// Energy redistribution path tracing (Cline et al.): short perturbation chains from
     /// path-traced seeds.
     Erpt,
+    /// Charted MLT: technique charts with path inversion, chart swaps by serial tempering.
+    Cmlt,
 }
 
 impl Algo {
@@ -36,6 +38,7 @@ impl Algo {
             Algo::Mmlt => "mmlt",
             Algo::Mlt => "mlt",
             Algo::Erpt => "erpt",
+            Algo::Cmlt => "cmlt",
         }
     }
 }

@@ -39,12 +39,15 @@ pub struct CompareArgs {
     /// Seed, depth, resolution, exposure, MIS.
     #[command(flatten)]
     pub options: RenderOptions,
-    /// Metropolis options (pssmlt, mmlt, mlt).
+    /// Metropolis options (pssmlt, mmlt, mlt, cmlt).
     #[command(flatten)]
     pub metropolis: MetropolisArgs,
     /// Path-space options (mlt, erpt).
     #[command(flatten)]
     pub pathspace: super::pathspace::PathSpaceArgs,
+    /// Charted MLT options (cmlt).
+    #[command(flatten)]
+    pub cmlt: super::cmlt::CmltArgs,
     /// Output folder. Default: `out/compare-<scene>`.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
@@ -282,6 +285,14 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
                 &a.pathspace.mlt(&common, &a.metropolis)?,
                 &a,
                 "mlt",
+                &reference,
+                &mut rows,
+            )?,
+            Algo::Cmlt => track_metropolis(
+                &scene,
+                &a.cmlt.cmlt(&scene, &common, &a.metropolis, &a.pathspace)?,
+                &a,
+                "cmlt",
                 &reference,
                 &mut rows,
             )?,

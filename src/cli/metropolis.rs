@@ -74,16 +74,20 @@ impl MetropolisArgs {
         }
     }
 
-    /// The Kelemen proposal.
-    pub fn kelemen(&self) -> Result<Kelemen, CliError> {
-        let step = match self.small_step {
+    /// The small-step kernel.
+    pub fn small_step(&self) -> SmallStep {
+        match self.small_step {
             SmallStepKind::Exponential => SmallStep::Exponential {
                 s1: self.s1,
                 s2: self.s2,
             },
             SmallStepKind::Gaussian => SmallStep::Gaussian { sigma: self.sigma },
-        };
-        Kelemen::new(self.large_step, step).map_err(|e| CliError::Usage(e.to_string()))
+        }
+    }
+
+    /// The Kelemen proposal.
+    pub fn kelemen(&self) -> Result<Kelemen, CliError> {
+        Kelemen::new(self.large_step, self.small_step()).map_err(|e| CliError::Usage(e.to_string()))
     }
 
     /// The importance kind.

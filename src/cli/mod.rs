@@ -1,6 +1,7 @@
 //! Command-line interface.
 
 mod algo;
+mod cmlt;
 mod compare;
 mod diff;
 mod duration;

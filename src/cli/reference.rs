@@ -54,6 +54,7 @@ pub fn run(mut a: ReferenceArgs) -> Result<(), CliError> {
         options: a.options,
         metropolis: super::metropolis::MetropolisArgs::default_values(),
         pathspace: super::pathspace::PathSpaceArgs::default_values(),
+        cmlt: super::cmlt::CmltArgs::default_values(),
         write_every: Duration::from_secs(60),
         threads: None,
         quiet: false,

@@ -43,12 +43,15 @@ pub struct RenderArgs {
     /// Seed, depth, resolution, exposure, MIS.
     #[command(flatten)]
     pub options: RenderOptions,
-    /// Metropolis options (pssmlt, mmlt, mlt).
+    /// Metropolis options (pssmlt, mmlt, mlt, cmlt).
     #[command(flatten)]
     pub metropolis: MetropolisArgs,
     /// Path-space options (mlt, erpt).
     #[command(flatten)]
     pub pathspace: PathSpaceArgs,
+    /// Charted MLT options (cmlt).
+    #[command(flatten)]
+    pub cmlt: super::cmlt::CmltArgs,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -198,7 +201,7 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
             erpt = Some(e);
             out
         }
-        Algo::Pssmlt | Algo::Mmlt | Algo::Mlt => {
+        Algo::Pssmlt | Algo::Mmlt | Algo::Mlt | Algo::Cmlt => {
             let mb = match budget {
                 Budget::SamplesPerPixel(n) => metropolis::Budget::MutationsPerPixel(n as f64),
                 Budget::Time(t) => metropolis::Budget::Time(t),
@@ -220,6 +223,13 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
                 Algo::Mmlt => run_method(
                     &scene,
                     &algo::mmlt(&common, &a.metropolis)?,
+                    &settings,
+                    a.quiet,
+                    cb,
+                )?,
+                Algo::Cmlt => run_method(
+                    &scene,
+                    &a.cmlt.cmlt(&scene, &common, &a.metropolis, &a.pathspace)?,
                     &settings,
                     a.quiet,
                     cb,

@@ -1,8 +1,10 @@
 //! Charted Metropolis light transport in the renderer (charted-MLT paper §5–6): the bidirectional
 //! techniques as [`mcmc_charts`] charts with exact path inversion.
 
+pub mod integrator;
 pub mod technique;
 
+pub use integrator::{Cmlt, CmltState};
 pub use technique::{
     TechniqueChart, camera_numbers, light_numbers, technique_charts, unit_integrand,
 };
