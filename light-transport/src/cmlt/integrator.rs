@@ -446,7 +446,7 @@ impl Method for Cmlt {
             let c = &mut state.x.contribution;
             c.importance *= (k + 1) as f64;
             for (_, v) in &mut c.splats {
-                *v = *v * (k + 1) as f64;
+                *v *= (k + 1) as f64;
             }
             state.bootstrap_scaled = true;
         } else {
@@ -470,7 +470,7 @@ impl Method for Cmlt {
             let c = &mut state.x.contribution;
             c.importance *= f;
             for (_, v) in &mut c.splats {
-                *v = *v * f;
+                *v *= f;
             }
             state.bootstrap_scaled = false;
         }
