@@ -63,6 +63,35 @@ fn every_subcommand_runs_on_a_tiny_image() {
         ]));
         assert!(ok, "{algo}: {e}");
     }
+    // The Metropolis family prints acceptance per move kind.
+    for (algo, kind) in [
+        ("pssmlt", "large_step"),
+        ("mmlt", "small_step"),
+        ("mlt", "multi-chain"),
+        ("erpt", "caustic"),
+        ("cmlt", "chart swap"),
+    ] {
+        let (ok, out, e) = run(charted().args([
+            "render",
+            "ring",
+            "--algo",
+            algo,
+            "--spp",
+            "2",
+            "--resolution",
+            "24x16",
+            "--bootstrap",
+            "2000",
+            "--chains",
+            "32",
+            "--erpt-chain-length",
+            "8",
+            "--quiet",
+            "-o",
+            &o(&format!("{algo}.exr")),
+        ]));
+        assert!(ok && out.contains(kind), "{algo}: {out}{e}");
+    }
     let (ok, _, e) = run(charted().args([
         "render",
         "caustic",
@@ -140,6 +169,36 @@ fn bad_input_gives_clear_errors() {
         (
             vec!["render".into(), "--spp".into(), "0".into()],
             "at least 1",
+        ),
+        (
+            vec![
+                "render".into(),
+                "--algo".into(),
+                "mlt".into(),
+                "--mutations".into(),
+                "lens=0.5,teleport=0.5".into(),
+            ],
+            "unknown mutation 'teleport'",
+        ),
+        (
+            vec![
+                "render".into(),
+                "--algo".into(),
+                "mlt".into(),
+                "--theta1".into(),
+                "0.5".into(),
+            ],
+            "perturbation radii",
+        ),
+        (
+            vec![
+                "render".into(),
+                "--algo".into(),
+                "cmlt".into(),
+                "--ipsm".into(),
+                "NaN".into(),
+            ],
+            "ipsm",
         ),
         (
             vec![

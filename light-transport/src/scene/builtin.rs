@@ -49,7 +49,7 @@ pub fn look_at(eye: DVec3, target: DVec3, up: DVec3) -> DMat4 {
 /// b.quad(DVec3::new(-1.0, 0.0, -1.0), DVec3::Z * 2.0, DVec3::X * 2.0, white, None);
 /// b.quad(DVec3::new(-0.2, 2.0, -0.2), DVec3::X * 0.4, DVec3::Z * 0.4, white, Some(Rgb::splat(10.0)));
 /// let scene = light_transport::scene::Scene::new(&b.finish(), None).unwrap();
-/// assert_eq!(scene.lights.len(), 1);
+/// assert_eq!(scene.lights.len(), 2); // one light per triangle of the quad
 /// ```
 pub struct SceneBuilder {
     d: SceneDescription,
