@@ -13,7 +13,8 @@
 //!   every coordinate, or a uniform `u`; accepted with `π_s(u')/π_s(u)`.
 //! * **chart swap** by serial tempering (on average one every `swap_every` mutations, default 16
 //!   as in the paper): propose `s'` with probability `q(s')` proportional to the technique's energy
-//!   (a deterministic pilot, mixed with 10% uniform), keep `x̄`, draw `u' ~ κ_{s'}(·|x̄)`; accept
+//!   (a deterministic pilot, mixed with 10% uniform), keep `x̄`, draw `u' ~ κ_{s'}(·|x̄)` (only
+//!   the vertices whose numbers differ between the two charts are inverted); accept
 //!   with `min(1, p_{s'}(x̄) q(s) / (p_s(x̄) q(s')))` — no evaluation of `f`.
 //! * **IPSM** (inverse primary-space perturbation, optional): in a uniformly chosen other chart
 //!   `j`, draw `u_j ~ κ_j(·|x̄)`, take a small step, map to `ȳ`; the path marginal `f` is preserved
@@ -310,11 +311,19 @@ impl Cmlt {
             chain.fail(SWAP, Failure::NotApplicable, observer);
             return;
         }
+        let (Some(from), Some(to)) = (self.chart(scene, k, i), self.chart(scene, k, j)) else {
+            chain.fail(SWAP, Failure::NotApplicable, observer);
+            return;
+        };
         chain.candidate.clone_from(&chain.state);
-        if !self.reparameterise(scene, &mut chain.candidate, j, rng) {
+        let y = &mut chain.candidate;
+        y.u.resize(to.dim(), 0.0);
+        // Only the vertices whose numbers differ between the charts are inverted (§6.1).
+        if !to.reparameterise(&chain.state.x, &from, &chain.state.u, &mut y.u, rng) {
             chain.fail(SWAP, Failure::Failed, observer);
             return;
         }
+        y.chart = j;
         // p_j/p_i = I(C*_i)/I(C*_j); the target value is the same in both charts (eq. 17).
         let ln_ratio = pi.ln() - pj.ln() + q[i].ln() - q[j].ln();
         let ln = chain.ln_density;

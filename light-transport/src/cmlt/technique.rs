@@ -75,6 +75,32 @@ impl<'a> TechniqueChart<'a> {
         self.k + 1 - self.s
     }
 
+    /// The numbers `u` of path `x` in this chart, given its numbers `u_from` in chart `from` (same
+    /// path length): only the vertices whose numbers differ between the two charts are inverted
+    /// (charted-MLT paper §6.1); the others keep their numbers, whose conditional law given `x` is
+    /// the same in both charts, so `u` has the law of [`Chart::invert`] when `u_from` has the law
+    /// of `from`'s inverse.
+    pub fn reparameterise(
+        &self,
+        x: &PathState,
+        from: &TechniqueChart<'_>,
+        u_from: &[f64],
+        u: &mut [f64],
+        rng: &mut ChainRng,
+    ) -> bool {
+        if from.k != self.k
+            || u_from.len() < from.dim()
+            || u.len() < self.dim()
+            || !(self.ln_density(x) > f64::NEG_INFINITY)
+        {
+            return false;
+        }
+        let (nc_old, nc) = (camera_numbers(from.t()), camera_numbers(self.t()));
+        let (cam, light) = u.split_at_mut(nc);
+        self.invert_camera(x, cam, rng, Some((from.t(), &u_from[..nc_old])))
+            && self.invert_light(x, light, rng, Some((from.s, &u_from[nc_old..])))
+    }
+
     /// Write the numbers of the scattering vertex `v` (reached from `prev`, leaving toward
     /// `next`) into `out` (one vertex block).
     fn invert_scattering(
@@ -99,14 +125,25 @@ impl<'a> TechniqueChart<'a> {
         true
     }
 
-    /// The camera numbers of path `x` (camera vertices `v_k, v_{k−1}, …`).
-    fn invert_camera(&self, x: &PathState, out: &mut [f64], rng: &mut ChainRng) -> bool {
+    /// The camera numbers of path `x` (camera vertices `v_k, v_{k−1}, …`). With `old` (the camera
+    /// vertex count and camera numbers of another chart at the same path), numbers whose
+    /// conditional law is the same in both charts are kept and only the others are drawn.
+    fn invert_camera(
+        &self,
+        x: &PathState,
+        out: &mut [f64],
+        rng: &mut ChainRng,
+        old: Option<(usize, &[f64])>,
+    ) -> bool {
         let v = &x.path.vertices;
         let (k, t) = (self.k, self.t());
         let lens = &v[k];
         let cam = &self.scene.camera;
         let free = [uniform(rng), uniform(rng)];
-        let (film, lens_u) = if t >= 2 {
+        let keep_endpoint = old.is_some_and(|(t_old, _)| t_old >= 2 && t >= 2);
+        let (film, lens_u) = if let (true, Some((_, o))) = (keep_endpoint, old) {
+            ([o[0], o[1]], [o[2], o[3]])
+        } else if t >= 2 {
             let w = (v[k - 1].p() - lens.p()).normalize_or_zero();
             match cam.invert(lens.p(), w, free) {
                 Some(r) => r,
@@ -122,6 +159,12 @@ impl<'a> TechniqueChart<'a> {
         // Camera vertex b (1 ≤ b ≤ t − 2) is path vertex k − b.
         for b in 1..t.saturating_sub(1) {
             let at = CAMERA_BLOCK + (b - 1) * VERTEX_BLOCK;
+            if let Some((t_old, o)) = old
+                && b + 2 <= t_old
+            {
+                out[at..at + VERTEX_BLOCK].copy_from_slice(&o[at..at + VERTEX_BLOCK]);
+                continue;
+            }
             let i = k - b;
             if !Self::invert_scattering(
                 &v[i],
@@ -136,37 +179,66 @@ impl<'a> TechniqueChart<'a> {
         true
     }
 
-    /// The light numbers of path `x` (light vertices `v_0, v_1, …`).
-    fn invert_light(&self, x: &PathState, out: &mut [f64], rng: &mut ChainRng) -> bool {
+    /// The light numbers of path `x` (light vertices `v_0, v_1, …`); `old` as for
+    /// [`TechniqueChart::invert_camera`], with the light vertex count and light numbers.
+    fn invert_light(
+        &self,
+        x: &PathState,
+        out: &mut [f64],
+        rng: &mut ChainRng,
+        old: Option<(usize, &[f64])>,
+    ) -> bool {
         let s = self.s;
         if s == 0 {
             return true;
         }
+        let old = old.filter(|(s_old, _)| *s_old >= 1);
         let v = &x.path.vertices;
         let VertexKind::Light { light } = v[0].kind else {
             return false;
         };
         let li = light as usize;
         let scene = self.scene;
-        out[0] = scene.light_distribution.invert(li, uniform(rng));
         let free = [uniform(rng), uniform(rng), uniform(rng), uniform(rng)];
-        let l = &scene.lights[li];
-        let w = if s >= 2 {
-            (v[1].p() - v[0].p()).normalize_or_zero()
-        } else {
-            v[0].n()
-        };
-        let Some((u_pos, u_dir)) = l.invert_emission(&scene.bvh.primitives, v[0].p(), w, free)
-        else {
-            return false;
-        };
-        out[1] = u_pos[0];
-        out[2] = u_pos[1];
-        let u_dir = if s >= 2 { u_dir } else { [free[2], free[3]] };
-        out[3] = u_dir[0];
-        out[4] = u_dir[1];
+        // Light choice and position have the same conditional law in every chart with s ≥ 1; the
+        // emitted direction is determined for s ≥ 2 and free for s = 1.
+        let keep_dir = old.is_some_and(|(s_old, _)| (s_old >= 2) == (s >= 2));
+        if let Some((_, o)) = old {
+            out[..3].copy_from_slice(&o[..3]);
+            if keep_dir {
+                out[3..5].copy_from_slice(&o[3..5]);
+            }
+        }
+        if !keep_dir {
+            if old.is_none() {
+                out[0] = scene.light_distribution.invert(li, uniform(rng));
+            }
+            let l = &scene.lights[li];
+            let w = if s >= 2 {
+                (v[1].p() - v[0].p()).normalize_or_zero()
+            } else {
+                v[0].n()
+            };
+            let Some((u_pos, u_dir)) = l.invert_emission(&scene.bvh.primitives, v[0].p(), w, free)
+            else {
+                return false;
+            };
+            if old.is_none() {
+                out[1] = u_pos[0];
+                out[2] = u_pos[1];
+            }
+            let u_dir = if s >= 2 { u_dir } else { [free[2], free[3]] };
+            out[3] = u_dir[0];
+            out[4] = u_dir[1];
+        }
         for b in 1..s.saturating_sub(1) {
             let at = LIGHT_BLOCK + (b - 1) * VERTEX_BLOCK;
+            if let Some((s_old, o)) = old
+                && b + 2 <= s_old
+            {
+                out[at..at + VERTEX_BLOCK].copy_from_slice(&o[at..at + VERTEX_BLOCK]);
+                continue;
+            }
             if !Self::invert_scattering(
                 &v[b],
                 &v[b - 1],
@@ -214,7 +286,7 @@ impl Chart<PathState> for TechniqueChart<'_> {
         }
         let nc = camera_numbers(self.t());
         let (cam, light) = u.split_at_mut(nc);
-        self.invert_camera(x, cam, rng) && self.invert_light(x, light, rng)
+        self.invert_camera(x, cam, rng, None) && self.invert_light(x, light, rng, None)
     }
 
     fn name(&self) -> String {
