@@ -12,12 +12,13 @@
 
 mod common;
 
-use common::{ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, min_p};
-use light_transport::cmlt::{Cmlt, CmltState, TechniqueChart};
-use light_transport::film::{Film, Image};
-use light_transport::metropolis::{
-    self, Budget, ImportanceKind, Method, MetropolisSettings, Seeding,
+use common::{
+    ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, blocks_and_stats, metropolis_runs, min_p,
+    settings,
 };
+use light_transport::cmlt::{Cmlt, CmltState, TechniqueChart};
+use light_transport::film::Image;
+use light_transport::metropolis::{ImportanceKind, Method};
 use light_transport::pathspace::{MutationProbabilities, Mutations};
 use light_transport::scene::{Scene, builtin};
 use mcmc_charts::Chart;
@@ -52,24 +53,7 @@ fn cmlt(scene: &Scene, ipsm: f64, pathspace: f64) -> Cmlt {
 }
 
 fn runs(scene: &Scene, m: &Cmlt) -> (Vec<Vec<f64>>, Stats) {
-    let mut all = Stats::default();
-    let images = (0..8)
-        .map(|r| {
-            let settings = MetropolisSettings {
-                chains: 64,
-                bootstrap: 4000,
-                budget: Budget::MutationsPerPixel(32.0),
-                seed: 131 + r,
-                seeding: Seeding::Resample,
-            };
-            let (film, stats): (Film, _) =
-                metropolis::run(scene, m, &settings, |_, _, _| true).unwrap();
-            assert_eq!(film.discarded, 0);
-            all.merge(&stats.stats);
-            blocks(&Image::from_film(&film))
-        })
-        .collect();
-    (images, all)
+    blocks_and_stats(metropolis_runs(scene, m, settings(4000, 32.0, 131), 8))
 }
 
 fn rate(stats: &Stats, kind: usize) -> f64 {
@@ -196,18 +180,9 @@ fn skewed(mut m: Cmlt) -> Cmlt {
 }
 
 fn images<M: Method>(scene: &Scene, m: &M) -> Vec<Vec<f64>> {
-    (0..8)
-        .map(|r| {
-            let settings = MetropolisSettings {
-                chains: 64,
-                bootstrap: 4000,
-                budget: Budget::MutationsPerPixel(128.0),
-                seed: 171 + r,
-                seeding: Seeding::Resample,
-            };
-            let (film, _) = metropolis::run(scene, m, &settings, |_, _, _| true).unwrap();
-            blocks(&Image::from_film(&film))
-        })
+    metropolis_runs(scene, m, settings(4000, 128.0, 171), 8)
+        .iter()
+        .map(|(film, _)| blocks(&Image::from_film(film)))
         .collect()
 }
 

@@ -13,8 +13,8 @@
 
 mod common;
 
-use common::{ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, min_p};
-use light_transport::film::{Film, Image};
+use common::{ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, metropolis_runs, min_p, settings};
+use light_transport::film::Image;
 use light_transport::integrators::Bdpt;
 use light_transport::metropolis::{
     self, Budget, Contribution, ImportanceKind, Method, MetropolisSettings, Mmlt, PrimaryState,
@@ -177,17 +177,9 @@ fn a_sampler_that_cannot_replay_its_seeds_is_refused() {
 // Convergence to BDPT on the built-in scenes.
 
 fn mlt_runs<M: Method>(scene: &Scene, m: &M, runs: u64) -> Vec<Vec<f64>> {
-    (0..runs)
-        .map(|r| {
-            let settings = MetropolisSettings {
-                chains: 64,
-                bootstrap: 20_000,
-                budget: Budget::MutationsPerPixel(32.0),
-                seed: 77 + r,
-                seeding: Seeding::Resample,
-            };
-            let (film, stats): (Film, _) =
-                metropolis::run(scene, m, &settings, |_, _, _| true).unwrap();
+    metropolis_runs(scene, m, settings(20_000, 32.0, 77), runs)
+        .into_iter()
+        .map(|(film, stats)| {
             assert_eq!(film.discarded, 0);
             assert!(stats.stats.total().acceptance_rate() > 0.05);
             blocks(&Image::from_film(&film))

@@ -16,8 +16,11 @@
 
 mod common;
 
-use common::{ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, min_p};
-use light_transport::film::{Film, Image};
+use common::{
+    ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, blocks_and_stats, metropolis_runs, min_p,
+    settings,
+};
+use light_transport::film::Image;
 use light_transport::integrators::{Budget as PassBudget, Estimator, Splat, render};
 use light_transport::metropolis::{
     self, Budget, ImportanceKind, Method, MetropolisSettings, Seeding, SplatRecorder,
@@ -47,24 +50,7 @@ fn mutations(probabilities: MutationProbabilities) -> Mutations {
 }
 
 fn runs<M: Method>(scene: &Scene, m: &M) -> (Vec<Vec<f64>>, mcmc_core::Stats) {
-    let mut all = mcmc_core::Stats::default();
-    let images = (0..8)
-        .map(|r| {
-            let settings = MetropolisSettings {
-                chains: 64,
-                bootstrap: 4000,
-                budget: Budget::MutationsPerPixel(32.0),
-                seed: 91 + r,
-                seeding: Seeding::Resample,
-            };
-            let (film, stats): (Film, _) =
-                metropolis::run(scene, m, &settings, |_, _, _| true).unwrap();
-            assert_eq!(film.discarded, 0);
-            all.merge(&stats.stats);
-            blocks(&Image::from_film(&film))
-        })
-        .collect();
-    (images, all)
+    blocks_and_stats(metropolis_runs(scene, m, settings(4000, 32.0, 91), 8))
 }
 
 #[test]

@@ -34,7 +34,7 @@ use crate::{Error, Result};
 use mcmc_charts::Chart;
 use mcmc_core::kernel::Observer;
 use mcmc_core::proposals::SmallStep;
-use mcmc_core::rng::{stream, uniform};
+use mcmc_core::rng::{categorical, stream, uniform};
 use mcmc_core::{Chain, ChainRng, Failure};
 
 /// A CMLT chain state.
@@ -221,23 +221,14 @@ impl Cmlt {
     /// Redraw `(s, u)` given the path: `s` by balance weight `p_s/Σp ∝ 1/I(C*_s)`, `u` by the
     /// inverse.
     fn refresh(&self, scene: &Scene, state: &mut CmltState, rng: &mut ChainRng) -> bool {
-        let total = state.x.inverse_sum(0, state.k + 1);
-        if !(total > 0.0) {
-            return false;
-        }
-        let mut v = uniform(rng) * total;
-        let mut pick = None;
-        for s in 0..=state.k {
-            let i = state.x.strategy_importance(s);
-            if i > 0.0 {
-                pick = Some(s);
-                if v < 1.0 / i {
-                    break;
-                }
-                v -= 1.0 / i;
-            }
-        }
-        pick.is_some_and(|s| self.reparameterise(scene, state, s, rng))
+        let weights: Vec<f64> = (0..=state.k)
+            .map(|s| {
+                let i = state.x.strategy_importance(s);
+                if i > 0.0 { 1.0 / i } else { 0.0 }
+            })
+            .collect();
+        categorical(&weights, uniform(rng))
+            .is_some_and(|s| self.reparameterise(scene, state, s, rng))
     }
 
     fn ln_target(state: &CmltState) -> f64 {
@@ -293,15 +284,7 @@ impl Cmlt {
     ) {
         let (k, i) = (chain.state.k, chain.state.chart);
         let q = &self.swap_proposal[k - 1];
-        let mut v = uniform(rng);
-        let mut j = q.len() - 1;
-        for (s, p) in q.iter().enumerate() {
-            if v < *p {
-                j = s;
-                break;
-            }
-            v -= p;
-        }
+        let j = categorical(q, uniform(rng)).unwrap_or(q.len() - 1);
         let (pi, pj) = (
             chain.state.x.strategy_importance(i),
             chain.state.x.strategy_importance(j),
@@ -385,20 +368,7 @@ impl Cmlt {
         rng: &mut ChainRng,
         observer: &mut O,
     ) {
-        let kinds = MutationKind::ALL;
-        let total: f64 = self.mutations.probabilities.0.iter().sum();
-        let mut v = uniform(rng) * total;
-        let mut kind = MutationKind::NewPath;
-        for k in kinds {
-            let p = self.mutations.probabilities.of(k) * total;
-            if p > 0.0 {
-                kind = k;
-                if v < p {
-                    break;
-                }
-                v -= p;
-            }
-        }
+        let kind = self.mutations.probabilities.pick(rng);
         let slot = PATHSPACE + kind as usize;
         let k = chain.state.k;
         // Chains keep their path length: the new-path mutation draws length k only.

@@ -36,7 +36,7 @@ use crate::metropolis::ImportanceKind;
 use crate::path::{Vertex, camera_subpath, connect, light_subpath};
 use crate::sampler::{IndependentStream, SampleStream, TECHNIQUE_STREAM};
 use crate::scene::Scene;
-use mcmc_core::rng::uniform;
+use mcmc_core::rng::{categorical, uniform};
 use mcmc_core::{ChainRng, Failure};
 
 const NEW_PATH_STREAM: u64 = 0x4e57_9a7f;
@@ -110,16 +110,7 @@ impl Bidirectional {
         let weights: Vec<f64> = (1..=k + 2)
             .map(|kd| deletion_weight(kd) * deletion_count(k, kd) as f64)
             .collect();
-        let total: f64 = weights.iter().sum();
-        let mut u = uniform(rng) * total;
-        let mut kd = k + 2;
-        for (i, w) in weights.iter().enumerate() {
-            if u < *w {
-                kd = i + 1;
-                break;
-            }
-            u -= w;
-        }
+        let kd = categorical(&weights, uniform(rng)).map_or(k + 2, |i| i + 1);
         let count = deletion_count(k, kd).max(1);
         let pick = ((uniform(rng) * count as f64) as usize).min(count - 1);
         let l = if kd == 1 {
@@ -159,15 +150,10 @@ impl Bidirectional {
         if lo > hi {
             return None;
         }
-        let mut u = uniform(rng);
-        for n in lo..=hi {
-            let p = self.addition_probability(k, d, n);
-            if u < p {
-                return Some(n);
-            }
-            u -= p;
-        }
-        Some(hi)
+        let weights: Vec<f64> = (lo..=hi)
+            .map(|n| self.addition_probability(k, d, n))
+            .collect();
+        Some(categorical(&weights, uniform(rng)).map_or(hi, |i| lo + i))
     }
 
     /// Number of splits `a = 0 … N − 1` of `n` new vertices (light side `a`, camera side `n − a`).
@@ -357,15 +343,8 @@ impl NewPath {
         rng: &mut ChainRng,
         y: &mut PathState,
     ) -> Result<f64, Failure> {
-        let mut u = uniform(rng);
-        let mut k = self.length_probability.len();
-        for (i, p) in self.length_probability.iter().enumerate() {
-            if u < *p {
-                k = i + 1;
-                break;
-            }
-            u -= p;
-        }
+        let k = categorical(&self.length_probability, uniform(rng))
+            .map_or(self.length_probability.len(), |i| i + 1);
         let mut stream = IndependentStream::new(mcmc_core::rng::stream(
             rand::Rng::next_u64(rng),
             NEW_PATH_STREAM,

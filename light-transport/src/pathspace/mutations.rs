@@ -12,7 +12,7 @@ use crate::metropolis::ImportanceKind;
 use crate::scene::Scene;
 use crate::{Error, Result};
 use mcmc_core::kernel::Observer;
-use mcmc_core::rng::uniform;
+use mcmc_core::rng::{categorical, uniform};
 use mcmc_core::{Chain, ChainRng};
 use std::fmt;
 use std::str::FromStr;
@@ -105,21 +105,9 @@ impl MutationProbabilities {
         }
     }
 
-    fn pick(&self, rng: &mut ChainRng) -> MutationKind {
-        let total: f64 = self.0.iter().sum();
-        let mut u = uniform(rng) * total;
-        let mut last = MutationKind::NewPath;
-        for kind in MutationKind::ALL {
-            let p = self.0[kind as usize];
-            if p > 0.0 {
-                if u < p {
-                    return kind;
-                }
-                u -= p;
-                last = kind;
-            }
-        }
-        last
+    /// Draw a mutation kind with these probabilities.
+    pub fn pick(&self, rng: &mut ChainRng) -> MutationKind {
+        categorical(&self.0, uniform(rng)).map_or(MutationKind::NewPath, |i| MutationKind::ALL[i])
     }
 }
 

@@ -3,10 +3,14 @@
 
 #![allow(dead_code)]
 
-use light_transport::film::Image;
+use light_transport::film::{Film, Image};
 use light_transport::integrators::{Bdpt, Budget as PassBudget, render};
+use light_transport::metropolis::{
+    self, Budget, Method, MetropolisSettings, MetropolisStats, Seeding,
+};
 use light_transport::path::{MisHeuristic, WalkSettings};
 use light_transport::scene::Scene;
+use mcmc_core::Stats;
 use mcmc_core::balance::holm;
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
@@ -86,4 +90,47 @@ pub fn bdpt_batches(scene: &Scene) -> Vec<Vec<f64>> {
             ))
         })
         .collect()
+}
+
+/// Driver settings of the convergence tests: 64 chains, resampled seeds.
+pub fn settings(bootstrap: usize, mutations_per_pixel: f64, seed: u64) -> MetropolisSettings {
+    MetropolisSettings {
+        chains: 64,
+        bootstrap,
+        budget: Budget::MutationsPerPixel(mutations_per_pixel),
+        seed,
+        seeding: Seeding::Resample,
+    }
+}
+
+/// `runs` independent renders of `m`: run `r` uses `settings` with seed `settings.seed + r`.
+pub fn metropolis_runs<M: Method>(
+    scene: &Scene,
+    m: &M,
+    settings: MetropolisSettings,
+    runs: u64,
+) -> Vec<(Film, MetropolisStats)> {
+    (0..runs)
+        .map(|r| {
+            let s = MetropolisSettings {
+                seed: settings.seed + r,
+                ..settings
+            };
+            metropolis::run(scene, m, &s, |_, _, _| true).unwrap()
+        })
+        .collect()
+}
+
+/// The block images of `runs` (which must have discarded nothing) and their merged statistics.
+pub fn blocks_and_stats(runs: Vec<(Film, MetropolisStats)>) -> (Vec<Vec<f64>>, Stats) {
+    let mut all = Stats::default();
+    let images = runs
+        .into_iter()
+        .map(|(film, stats)| {
+            assert_eq!(film.discarded, 0);
+            all.merge(&stats.stats);
+            blocks(&Image::from_film(&film))
+        })
+        .collect();
+    (images, all)
 }
