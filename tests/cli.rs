@@ -92,6 +92,26 @@ fn every_subcommand_runs_on_a_tiny_image() {
         ]));
         assert!(ok && out.contains(kind), "{algo}: {out}{e}");
     }
+    let (ok, out, e) = run(charted().args([
+        "render",
+        "door",
+        "--algo",
+        "cmlt",
+        "--swaps",
+        "replica",
+        "--spp",
+        "4",
+        "--resolution",
+        "24x16",
+        "--bootstrap",
+        "2000",
+        "--chains",
+        "64",
+        "--quiet",
+        "-o",
+        &o("cmlt-replica.exr"),
+    ]));
+    assert!(ok && out.contains("replica exchange"), "{out}{e}");
     let (ok, _, e) = run(charted().args([
         "render",
         "caustic",
@@ -199,6 +219,16 @@ fn bad_input_gives_clear_errors() {
                 "NaN".into(),
             ],
             "ipsm",
+        ),
+        (
+            vec![
+                "render".into(),
+                "--algo".into(),
+                "cmlt".into(),
+                "--swaps".into(),
+                "tempering".into(),
+            ],
+            "tempering",
         ),
         (
             vec![

@@ -6,9 +6,18 @@
 //!   (the identity chart), on the Cornell box (specular spheres) and the door (layered table).
 //! * Swaps are accepted at a healthy rate and never fail to invert.
 //! * A chart swap that forgets the proposal ratio `q(s)/q(s')` is caught.
+//! * The replica-exchange variant (chains keep their chart and exchange paths) converges on every
+//!   built-in scene. The image alone cannot show that each chain samples its own technique
+//!   (exchanges only permute paths among chains), so the chains of each chart are also recorded
+//!   alone and the shape of their image compared with plain Monte Carlo of that technique — with
+//!   IPSM and path-space mutations in their chart-keeping form too; an exchange accepted without
+//!   eq. 24's ratio is caught that way. Exchanges pair chains of one length in different charts,
+//!   independently of their paths, and the image does not depend on the thread count.
 //!
 //! Statistical verdicts as in `metropolis.rs`: Welch t-tests per 6×6 block between 8 independent
-//! runs and 16 BDPT batches, Holm-corrected, α = 1e-4 per comparison (8 comparisons here).
+//! runs and 16 BDPT (or plain Monte Carlo) batches, Holm-corrected, α = 1e-4 per comparison: 13
+//! image and 45 per-technique comparisons of correct integrators here, so a family-wise
+//! false-positive rate ≤ 5.8e-3.
 
 mod common;
 
@@ -16,40 +25,38 @@ use common::{
     ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, blocks_and_stats, metropolis_runs, min_p,
     settings,
 };
-use light_transport::cmlt::{Cmlt, CmltState, TechniqueChart};
+use light_transport::cmlt::{Cmlt, CmltSettings, CmltState, SwapKind, TechniqueChart};
+use light_transport::film::Film;
 use light_transport::film::Image;
-use light_transport::metropolis::{ImportanceKind, Method};
-use light_transport::pathspace::{MutationProbabilities, Mutations};
+use light_transport::metropolis::{ImportanceKind, Method, MetropolisSettings};
 use light_transport::scene::{Scene, builtin};
 use mcmc_charts::Chart;
-use mcmc_core::kernel::Observer;
-use mcmc_core::proposals::SmallStep;
+use mcmc_core::kernel::{FnObserver, Observer};
 use mcmc_core::rng::uniform;
 use mcmc_core::{Chain, ChainRng, Failure, Stats};
+use rayon::prelude::*;
 
 fn scene(name: &str) -> Scene {
     Scene::new(&builtin::builtin(name).unwrap(), Some((W, H))).unwrap()
 }
 
 fn cmlt(scene: &Scene, ipsm: f64, pathspace: f64) -> Cmlt {
-    Cmlt::new(
-        scene,
-        MAX_EDGES,
-        ImportanceKind::Luminance,
-        SmallStep::default(),
-        0.3,
-        16.0,
+    cmlt_with(scene, SwapKind::SerialTempering, ipsm, pathspace)
+}
+
+fn cmlt_with(scene: &Scene, swaps: SwapKind, ipsm: f64, pathspace: f64) -> Cmlt {
+    Cmlt::new(scene, cmlt_settings(swaps, ipsm, pathspace)).unwrap()
+}
+
+fn cmlt_settings(swaps: SwapKind, ipsm: f64, pathspace: f64) -> CmltSettings {
+    CmltSettings {
+        max_edges: MAX_EDGES,
+        swaps,
         ipsm,
         pathspace,
-        Mutations {
-            max_edges: MAX_EDGES,
-            importance: ImportanceKind::Luminance,
-            probabilities: MutationProbabilities::default(),
-            perturbation: Default::default(),
-        },
-        500,
-    )
-    .unwrap()
+        pilot: 500,
+        ..Default::default()
+    }
 }
 
 fn runs(scene: &Scene, m: &Cmlt) -> (Vec<Vec<f64>>, Stats) {
@@ -191,7 +198,7 @@ fn a_swap_without_the_proposal_ratio_is_caught() {
     let scene = scene("cornell");
     let reference = bdpt_batches(&scene);
     let mut correct = skewed(cmlt(&scene, 0.0, 0.0));
-    correct.swap_every = 2.0;
+    correct.settings.swap_every = 2.0;
     let p = min_p(&images(&scene, &correct), &reference);
     println!("skewed swap proposal: p = {p:.3e}");
     assert!(
@@ -202,4 +209,283 @@ fn a_swap_without_the_proposal_ratio_is_caught() {
     let p = min_p(&images(&scene, &broken), &reference);
     println!("swap without q ratio: p = {p:.3e}");
     assert!(p < ALPHA, "the broken swap was not caught (p = {p:.2e})");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Replica exchange.
+
+#[test]
+fn replica_exchange_converges_to_bdpt_on_every_builtin_scene() {
+    for name in builtin::BUILTIN {
+        let scene = scene(name);
+        let mut m = cmlt_with(&scene, SwapKind::ReplicaExchange, 0.0, 0.0);
+        m.settings.swap_every = 4.0;
+        let (images, stats) = runs(&scene, &m);
+        let p = min_p(&images, &bdpt_batches(&scene));
+        let ex = &stats.kinds[2];
+        println!(
+            "{name}: p = {p:.3e}, exchanges {:.1}% of {} ({} not applicable)",
+            100.0 * rate(&stats, 2),
+            ex.proposed,
+            ex.not_applicable
+        );
+        assert!(ex.proposed > 0 && ex.accepted > 0);
+        assert_eq!(ex.failed, 0, "{name}: an inversion failed");
+        assert!(
+            p > ALPHA,
+            "{name}: CMLT-RE disagrees with BDPT (p = {p:.2e})"
+        );
+    }
+}
+
+/// Replica exchange that accepts every exchange (eq. 24's ratio forgotten).
+#[derive(Clone)]
+struct ExchangeWithoutRatio(Cmlt);
+
+impl Method for ExchangeWithoutRatio {
+    type State = CmltState;
+    fn groups(&self) -> usize {
+        self.0.groups()
+    }
+    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> CmltState {
+        self.0.independent(scene, g, seed)
+    }
+    fn mutate<O: Observer<CmltState>>(
+        &self,
+        scene: &Scene,
+        chain: &mut Chain<CmltState>,
+        n: u64,
+        rng: &mut ChainRng,
+        observer: &mut O,
+    ) {
+        self.0.mutate(scene, chain, n, rng, observer);
+    }
+    fn exchange_every(&self) -> Option<u64> {
+        self.0.exchange_every()
+    }
+    fn exchange(&self, scene: &Scene, chains: &mut [Chain<CmltState>], rng: &mut ChainRng) {
+        for (a, b) in Cmlt::exchange_pairs(chains, rng) {
+            let (x, y) = (&chains[a].state, &chains[b].state);
+            let (k, i, j) = (x.k, x.chart, y.chart);
+            if !(x.x.strategy_importance(j) > 0.0 && y.x.strategy_importance(i) > 0.0) {
+                continue;
+            }
+            let ci = TechniqueChart::new(scene, k, i, ImportanceKind::Luminance).unwrap();
+            let cj = TechniqueChart::new(scene, k, j, ImportanceKind::Luminance).unwrap();
+            let (mut ua, mut ub) = (vec![0.0; ci.dim()], vec![0.0; cj.dim()]);
+            assert!(ci.reparameterise(&y.x, &cj, &y.u, &mut ua, rng));
+            assert!(cj.reparameterise(&x.x, &ci, &x.u, &mut ub, rng));
+            // Missing: accept with min(1, p_i(x̄₂) p_j(x̄₁) / (p_i(x̄₁) p_j(x̄₂))).
+            let (xa, xb) = (chains[a].state.x.clone(), chains[b].state.x.clone());
+            let (la, lb) = (chains[a].ln_density, chains[b].ln_density);
+            chains[a].state.x = xb;
+            chains[a].state.u = ua;
+            chains[a].ln_density = lb;
+            chains[b].state.x = xa;
+            chains[b].state.u = ub;
+            chains[b].ln_density = la;
+        }
+    }
+    fn kinds(&self) -> Vec<String> {
+        self.0.kinds()
+    }
+}
+
+/// Records only the chains of chart `s`: under replica exchange every chain keeps its chart, so
+/// this is the image of technique `s` (summed over path lengths), `Σ_k ∫ f w_{k,s}`.
+struct OnlyChart<M>(M, usize);
+
+impl<M: Method<State = CmltState>> Method for OnlyChart<M> {
+    type State = CmltState;
+    fn groups(&self) -> usize {
+        self.0.groups()
+    }
+    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> CmltState {
+        self.0.independent(scene, g, seed)
+    }
+    fn mutate<O: Observer<CmltState>>(
+        &self,
+        scene: &Scene,
+        chain: &mut Chain<CmltState>,
+        n: u64,
+        rng: &mut ChainRng,
+        observer: &mut O,
+    ) {
+        let s = self.1;
+        let mut only = FnObserver(|c: &CmltState, p: &CmltState, a: f64, kind: usize| {
+            if c.chart == s {
+                observer.observe(c, p, a, kind);
+            }
+        });
+        self.0.mutate(scene, chain, n, rng, &mut only);
+    }
+    fn exchange_every(&self) -> Option<u64> {
+        self.0.exchange_every()
+    }
+    fn exchange(&self, scene: &Scene, chains: &mut [Chain<CmltState>], rng: &mut ChainRng) {
+        self.0.exchange(scene, chains, rng);
+    }
+    fn kinds(&self) -> Vec<String> {
+        self.0.kinds()
+    }
+}
+
+/// Longest path of the per-technique tests.
+const TECHNIQUE_EDGES: usize = 4;
+
+/// Plain Monte Carlo image of technique `s` (all lengths up to [`TECHNIQUE_EDGES`]): uniform
+/// numbers in each chart, the path's balance-weighted value `f / Σ p` splatted — 16 independent
+/// batches of `spp` samples per pixel per chart.
+fn technique_batches(scene: &Scene, s: usize, spp: usize) -> Vec<Vec<f64>> {
+    (0..16u64)
+        .into_par_iter()
+        .map(|batch| {
+            let mut film = Film::new(W, H);
+            let n = spp * W * H;
+            for k in s.max(1)..=TECHNIQUE_EDGES {
+                let chart = TechniqueChart::new(scene, k, s, ImportanceKind::Luminance).unwrap();
+                let mut rng = mcmc_core::rng::substream(0x7EC4, batch, (k * 16 + s) as u64);
+                let mut u = vec![0.0; chart.dim()];
+                let mut x = Default::default();
+                for _ in 0..n {
+                    u.iter_mut().for_each(|v| *v = uniform(&mut rng));
+                    if chart.forward(&u, &mut x) {
+                        for &(r, c) in &x.contribution.splats {
+                            film.add_splat(r, c);
+                        }
+                    }
+                }
+            }
+            film.splat_scale = spp as f64;
+            shape(blocks(&Image::from_film(&film)))
+        })
+        .collect()
+}
+
+/// Blocks divided by their sum. The chains of one chart deposit a total fixed by how many of them
+/// the seeding gave that chart (each mutation deposits the luminance `b`), a noisy per-run scale
+/// that says nothing about the law of the chains; the shape of their image is what a chart's law
+/// decides. (The ratio's bias is of the order of the squared relative noise of a batch total,
+/// ≈1e-3 here, below the tests' resolution.)
+fn shape(mut v: Vec<f64>) -> Vec<f64> {
+    let total: f64 = v.iter().sum();
+    if total > 0.0 {
+        v.iter_mut().for_each(|x| *x /= total);
+    }
+    v
+}
+
+/// The smallest p-value over techniques `s = 0 ..= TECHNIQUE_EDGES` of chains of chart `s`
+/// (recorded alone) against plain Monte Carlo of technique `s`.
+fn per_technique_p<M: Method<State = CmltState> + Clone>(scene: &Scene, m: &M, label: &str) -> f64 {
+    (0..=TECHNIQUE_EDGES)
+        .map(|s| {
+            let reference = technique_batches(scene, s, 16);
+            let settings = MetropolisSettings {
+                chains: 256,
+                ..settings(4000, 64.0, 211)
+            };
+            let runs = metropolis_runs(scene, &OnlyChart(m.clone(), s), settings, 8);
+            let images: Vec<Vec<f64>> = runs
+                .iter()
+                .map(|(film, _)| shape(blocks(&Image::from_film(film))))
+                .collect();
+            let p = min_p(&images, &reference);
+            println!("{label}: technique s = {s}: p = {p:.3e}");
+            p
+        })
+        .fold(1.0, f64::min)
+}
+
+fn replica(scene: &Scene, ipsm: f64, pathspace: f64, swap_every: f64) -> Cmlt {
+    let settings = CmltSettings {
+        max_edges: TECHNIQUE_EDGES,
+        swap_every,
+        ..cmlt_settings(SwapKind::ReplicaExchange, ipsm, pathspace)
+    };
+    Cmlt::new(scene, settings).unwrap()
+}
+
+#[test]
+fn replica_exchange_chains_sample_their_own_technique() {
+    // The image alone cannot tell whether each chain samples its own technique: the exchanges
+    // only permute paths among chains, so a wrong per-chart law can leave the population right.
+    for name in ["caustic", "cornell", "door"] {
+        let scene = scene(name);
+        for (ipsm, pathspace) in [(0.0, 0.0), (0.3, 0.0), (0.0, 0.3)] {
+            let m = replica(&scene, ipsm, pathspace, 2.0);
+            let label = format!("{name} ipsm {ipsm} pathspace {pathspace}");
+            let p = per_technique_p(&scene, &m, &label);
+            assert!(
+                p > ALPHA,
+                "{label}: a chart's chains disagree with its technique (p = {p:.2e})"
+            );
+        }
+    }
+}
+
+#[test]
+fn an_exchange_without_the_acceptance_ratio_is_caught() {
+    // The caustic scene: techniques with very different footprints (the caustic is made by light
+    // tracing, the rest by next-event estimation), so mixing their paths shows.
+    let scene = scene("caustic");
+    let broken = ExchangeWithoutRatio(replica(&scene, 0.0, 0.0, 2.0));
+    let p = per_technique_p(&scene, &broken, "exchange without its ratio");
+    assert!(
+        p < ALPHA,
+        "the broken exchange was not caught (p = {p:.2e})"
+    );
+}
+
+#[test]
+fn exchange_pairs_cross_charts_within_a_length_and_ignore_the_paths() {
+    let scene = scene("door");
+    let m = cmlt_with(&scene, SwapKind::ReplicaExchange, 0.0, 0.0);
+    // Chains of a few lengths and charts, with their bootstrap paths.
+    let mut chains: Vec<Chain<CmltState>> = (0..200u64)
+        .map(|c| Chain::unchecked(m.independent(&scene, (c % 3) as usize, c), 0.0))
+        .collect();
+    let pairs = Cmlt::exchange_pairs(&chains, &mut mcmc_core::rng::stream(5, 0));
+    assert!(pairs.len() > 40, "only {} pairs", pairs.len());
+    let mut seen = vec![false; chains.len()];
+    for &(a, b) in &pairs {
+        let (x, y) = (&chains[a].state, &chains[b].state);
+        assert_eq!(x.k, y.k);
+        assert_ne!(x.chart, y.chart);
+        assert!(!seen[a] && !seen[b], "a chain is in two pairs");
+        seen[a] = true;
+        seen[b] = true;
+    }
+    // The pairing depends on the charts and the random numbers, not on the paths.
+    for c in &mut chains {
+        c.state.x = Default::default();
+        c.state.u.iter_mut().for_each(|v| *v = 0.5);
+    }
+    assert_eq!(
+        pairs,
+        Cmlt::exchange_pairs(&chains, &mut mcmc_core::rng::stream(5, 0))
+    );
+}
+
+#[test]
+fn replica_exchange_images_do_not_depend_on_the_thread_count() {
+    let scene = scene("door");
+    let mut m = cmlt_with(&scene, SwapKind::ReplicaExchange, 0.0, 0.0);
+    m.settings.swap_every = 2.0;
+    let render = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let (film, stats) =
+                light_transport::metropolis::run(&scene, &m, &settings(2000, 8.0, 3), |_, _, _| {
+                    true
+                })
+                .unwrap();
+            assert!(stats.stats.kinds[2].accepted > 0);
+            Image::from_film(&film).pixels
+        })
+    };
+    assert_eq!(render(1), render(2));
 }

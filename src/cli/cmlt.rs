@@ -5,13 +5,28 @@ use super::algo::Common;
 use super::metropolis::MetropolisArgs;
 use super::pathspace::PathSpaceArgs;
 use clap::Args;
-use light_transport::cmlt::Cmlt;
+use light_transport::cmlt::{Cmlt, CmltSettings, SwapKind};
 use light_transport::scene::Scene;
+
+/// How chart swaps are made.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Swaps {
+    /// Serial tempering (the paper's default).
+    Serial,
+    /// Replica exchange between chains of different charts.
+    Replica,
+}
 
 /// Charted MLT options.
 #[derive(Args, Debug, Clone)]
 pub struct CmltArgs {
-    /// Mean mutations between chart swaps (serial tempering; 0 disables swaps).
+    /// How chains change technique chart: `serial` (serial tempering: a chain moves its own path
+    /// to another chart) or `replica` (replica exchange: chains keep their chart and exchange
+    /// paths with chains of other charts).
+    #[arg(long, value_enum, default_value_t = Swaps::Serial)]
+    pub swaps: Swaps,
+    /// Serial tempering: mean mutations between chart swaps. Replica exchange: mutations per
+    /// chain between exchange rounds. 0 disables swaps.
     #[arg(long, default_value_t = 16.0)]
     pub swap_every: f64,
     /// Probability of an inverse primary-space perturbation per mutation.
@@ -46,17 +61,22 @@ impl CmltArgs {
         p: &PathSpaceArgs,
     ) -> Result<Cmlt, CliError> {
         let mutations = p.mlt(c, m)?.mutations;
-        Ok(Cmlt::new(
-            scene,
-            c.max_edges,
-            m.importance(),
-            m.small_step(),
-            m.large_step,
-            self.swap_every,
-            self.ipsm,
-            self.pathspace,
-            mutations,
-            self.cmlt_pilot,
-        )?)
+        let settings = CmltSettings {
+            max_edges: c.max_edges,
+            importance: m.importance(),
+            small_step: m.small_step(),
+            large_step: m.large_step,
+            swaps: match self.swaps {
+                Swaps::Serial => SwapKind::SerialTempering,
+                Swaps::Replica => SwapKind::ReplicaExchange,
+            },
+            swap_every: self.swap_every,
+            ipsm: self.ipsm,
+            pathspace: self.pathspace,
+            probabilities: mutations.probabilities,
+            perturbation: mutations.perturbation,
+            pilot: self.cmlt_pilot,
+        };
+        Ok(Cmlt::new(scene, settings)?)
     }
 }

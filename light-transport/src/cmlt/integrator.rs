@@ -28,7 +28,9 @@
 
 use super::technique::TechniqueChart;
 use crate::metropolis::{Contribution, ImportanceKind, Method, Recordable};
-use crate::pathspace::{MutationKind, Mutations, NewPath, PathState};
+use crate::pathspace::{
+    MutationKind, MutationProbabilities, Mutations, NewPath, PathState, PerturbationSettings,
+};
 use crate::scene::Scene;
 use crate::{Error, Result};
 use mcmc_charts::Chart;
@@ -58,9 +60,21 @@ impl Recordable for CmltState {
     }
 }
 
-/// CMLT settings.
+/// How chart swaps are made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SwapKind {
+    /// Serial tempering: a chain moves its own path to another chart (`q(s')` by technique
+    /// energy; accepted with `p_{s'} q(s) / (p_s q(s'))`).
+    #[default]
+    SerialTempering,
+    /// Replica exchange: every chain keeps the chart it was seeded in; chains of the same path
+    /// length in different charts exchange paths (accepted with eq. 24). See [`super::replica`].
+    ReplicaExchange,
+}
+
+/// CMLT settings (validated by [`Cmlt::new`]).
 #[derive(Clone, Debug)]
-pub struct Cmlt {
+pub struct CmltSettings {
     /// Longest path (edges); chains exist for every length `1 ..= max_edges`.
     pub max_edges: usize,
     /// Colour to scalar.
@@ -69,47 +83,81 @@ pub struct Cmlt {
     pub small_step: SmallStep,
     /// Probability of a large step among in-chart moves.
     pub large_step: f64,
-    /// Mean mutations between chart swaps (0: never swap).
+    /// Serial tempering or replica exchange.
+    pub swaps: SwapKind,
+    /// Serial tempering: mean mutations between chart swaps. Replica exchange: mutations per
+    /// chain between exchange rounds (rounded to a whole number). 0: never swap.
     pub swap_every: f64,
     /// Probability of an inverse primary-space perturbation per mutation.
     pub ipsm: f64,
     /// Probability of a path-space mutation per mutation (the identity chart).
     pub pathspace: f64,
-    /// Path-space mutations used when `pathspace > 0`.
-    pub mutations: Mutations,
+    /// Mix of path-space mutations used when `pathspace > 0`.
+    pub probabilities: MutationProbabilities,
+    /// Their perturbation offsets.
+    pub perturbation: PerturbationSettings,
+    /// Uniform samples per technique chart in the pilot estimating technique energies.
+    pub pilot: usize,
+}
+
+impl Default for CmltSettings {
+    /// The paper's configuration: serial-tempering swaps every 16 mutations, 30% large steps,
+    /// paths of up to 8 edges.
+    fn default() -> Self {
+        Self {
+            max_edges: 8,
+            importance: ImportanceKind::Luminance,
+            small_step: SmallStep::default(),
+            large_step: 0.3,
+            swaps: SwapKind::SerialTempering,
+            swap_every: 16.0,
+            ipsm: 0.0,
+            pathspace: 0.0,
+            probabilities: MutationProbabilities::default(),
+            perturbation: PerturbationSettings::default(),
+            pilot: 1000,
+        }
+    }
+}
+
+/// The CMLT integrator: settings, the swap proposal from the pilot, the path-space mutations.
+#[derive(Clone, Debug)]
+pub struct Cmlt {
+    /// Settings.
+    pub settings: CmltSettings,
     /// Swap proposal `q(s | k)`, index `[k − 1][s]`.
     pub swap_proposal: Vec<Vec<f64>>,
+    /// Path-space mutations (from the settings).
+    pub mutations: Mutations,
 }
 
 /// Move kinds, in statistics order.
 pub const KINDS: [&str; 4] = ["small step", "large step", "chart swap", "ipsm"];
-const SMALL: usize = 0;
-const LARGE: usize = 1;
-const SWAP: usize = 2;
-const IPSM: usize = 3;
-const PATHSPACE: usize = 4;
+pub(super) const SMALL: usize = 0;
+pub(super) const LARGE: usize = 1;
+pub(super) const SWAP: usize = 2;
+pub(super) const IPSM: usize = 3;
+pub(super) const PATHSPACE: usize = 4;
 const PILOT: u64 = 0xC417;
 
 impl Cmlt {
     /// CMLT on `scene`: validates the settings and runs the pilot that estimates the energy of
-    /// every technique (`pilot` uniform samples per chart).
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        scene: &Scene,
-        max_edges: usize,
-        importance: ImportanceKind,
-        small_step: SmallStep,
-        large_step: f64,
-        swap_every: f64,
-        ipsm: f64,
-        pathspace: f64,
-        mutations: Mutations,
-        pilot: usize,
-    ) -> Result<Self> {
+    /// every technique (`settings.pilot` uniform samples per chart).
+    pub fn new(scene: &Scene, settings: CmltSettings) -> Result<Self> {
         let bad = |name: &str, reason: String| Error::InvalidParameter {
             name: name.into(),
             reason,
         };
+        let CmltSettings {
+            max_edges,
+            importance,
+            small_step,
+            large_step,
+            swap_every,
+            ipsm,
+            pathspace,
+            ..
+        } = settings;
         small_step
             .validate()
             .map_err(|e| bad("small step", e.to_string()))?;
@@ -140,11 +188,17 @@ impl Cmlt {
                 format!("must be 0 (no swaps) or at least 1, got {swap_every}"),
             ));
         }
+        let mutations = Mutations {
+            max_edges,
+            importance,
+            probabilities: settings.probabilities,
+            perturbation: settings.perturbation,
+        };
         if pathspace > 0.0 {
             mutations.probabilities.validate()?;
             mutations.perturbation.validate()?;
         }
-        let pilot = pilot.max(1);
+        let pilot = settings.pilot.max(1);
         let swap_proposal = (1..=max_edges)
             .map(|k| {
                 let energy: Vec<f64> = (0..=k)
@@ -183,20 +237,14 @@ impl Cmlt {
             })
             .collect();
         Ok(Self {
-            max_edges,
-            importance,
-            small_step,
-            large_step,
-            swap_every,
-            ipsm,
-            pathspace,
-            mutations,
+            settings,
             swap_proposal,
+            mutations,
         })
     }
 
     fn chart<'a>(&self, scene: &'a Scene, k: usize, s: usize) -> Option<TechniqueChart<'a>> {
-        TechniqueChart::new(scene, k, s, self.importance)
+        TechniqueChart::new(scene, k, s, self.settings.importance)
     }
 
     /// Put `state` in chart `s` at its path: `u` from the exact inverse.
@@ -221,14 +269,32 @@ impl Cmlt {
     /// Redraw `(s, u)` given the path: `s` by balance weight `p_s/Σp ∝ 1/I(C*_s)`, `u` by the
     /// inverse.
     fn refresh(&self, scene: &Scene, state: &mut CmltState, rng: &mut ChainRng) -> bool {
-        let weights: Vec<f64> = (0..=state.k)
-            .map(|s| {
-                let i = state.x.strategy_importance(s);
-                if i > 0.0 { 1.0 / i } else { 0.0 }
-            })
-            .collect();
+        let weights: Vec<f64> = (0..=state.k).map(|s| state.x.balance_weight(s)).collect();
         categorical(&weights, uniform(rng))
             .is_some_and(|s| self.reparameterise(scene, state, s, rng))
+    }
+
+    /// After a move of the path from `x` to `y.x` that preserves the path marginal `f`: put
+    /// `(s, u)` at the new path. Serial tempering redraws the chart by balance weight (Gibbs, no
+    /// ratio). Under replica exchange the chain keeps its chart `chart`, whose path-space target
+    /// is `f w_chart`: the numbers come from the inverse and the returned log ratio
+    /// `ln w_chart(ȳ) − ln w_chart(x̄)` joins the acceptance. `None`: reject.
+    fn settle(
+        &self,
+        scene: &Scene,
+        y: &mut CmltState,
+        chart: usize,
+        x: &PathState,
+        rng: &mut ChainRng,
+    ) -> Option<f64> {
+        match self.settings.swaps {
+            SwapKind::SerialTempering => self.refresh(scene, y, rng).then_some(0.0),
+            SwapKind::ReplicaExchange => {
+                let (wy, wx) = (y.x.balance_weight(chart), x.balance_weight(chart));
+                (wy > 0.0 && wx > 0.0 && self.reparameterise(scene, y, chart, rng))
+                    .then(|| wy.ln() - wx.ln())
+            }
+        }
     }
 
     fn ln_target(state: &CmltState) -> f64 {
@@ -248,7 +314,7 @@ impl Cmlt {
         rng: &mut ChainRng,
         observer: &mut O,
     ) {
-        let large = uniform(rng) < self.large_step;
+        let large = uniform(rng) < self.settings.large_step;
         let kind = if large { LARGE } else { SMALL };
         let (k, s) = (chain.state.k, chain.state.chart);
         let Some(chart) = self.chart(scene, k, s) else {
@@ -263,7 +329,7 @@ impl Cmlt {
             *b = if large {
                 uniform(rng)
             } else {
-                self.small_step.perturb(a, rng)
+                self.settings.small_step.perturb(a, rng)
             };
         }
         let ln = if chart.forward(&y.u, &mut y.x) {
@@ -339,7 +405,7 @@ impl Cmlt {
             return;
         }
         u.iter_mut()
-            .for_each(|v| *v = self.small_step.perturb(*v, rng));
+            .for_each(|v| *v = self.settings.small_step.perturb(*v, rng));
         let y = &mut chain.candidate;
         y.k = k;
         if !chart.forward(&u, &mut y.x) {
@@ -350,13 +416,19 @@ impl Cmlt {
         let iy = y.x.strategy_importance(j);
         y.chart = j;
         y.u = u;
-        if !self.refresh(scene, y, rng) || !(iy > 0.0) {
+        let settled = if iy > 0.0 {
+            self.settle(scene, y, chain.state.chart, &chain.state.x, rng)
+        } else {
+            None
+        };
+        let Some(ln_w) = settled else {
             chain.decide(f64::NEG_INFINITY, 0.0, IPSM, rng, observer);
             return;
-        }
-        // Path marginal f: a = I(C*_j(ȳ))/I(C*_j(x̄)); the chain's own density follows ȳ.
+        };
+        // Path marginal f: a = I(C*_j(ȳ))/I(C*_j(x̄)) (times w_s(ȳ)/w_s(x̄) when the chart is
+        // kept); the chain's own density follows ȳ.
         let ln_y = Self::ln_target(y);
-        let ln_ratio = iy.ln() - ix.ln() - (ln_y - chain.ln_density);
+        let ln_ratio = iy.ln() - ix.ln() + ln_w - (ln_y - chain.ln_density);
         chain.decide(ln_y, ln_ratio, IPSM, rng, observer);
     }
 
@@ -372,7 +444,7 @@ impl Cmlt {
         let slot = PATHSPACE + kind as usize;
         let k = chain.state.k;
         // Chains keep their path length: the new-path mutation draws length k only.
-        let mut lengths = vec![0.0; self.max_edges];
+        let mut lengths = vec![0.0; self.settings.max_edges];
         lengths[k - 1] = 1.0;
         let np = NewPath {
             length_probability: lengths,
@@ -388,12 +460,14 @@ impl Cmlt {
                     return;
                 }
                 y.k = k;
-                if !self.refresh(scene, y, rng) {
+                let Some(ln_w) = self.settle(scene, y, chain.state.chart, &chain.state.x, rng)
+                else {
                     chain.decide(f64::NEG_INFINITY, 0.0, slot, rng, observer);
                     return;
-                }
+                };
                 let ln_y = Self::ln_target(y);
-                chain.decide(ln_y, r - (ln_y - chain.ln_density), slot, rng, observer);
+                let ln_ratio = r + ln_w - (ln_y - chain.ln_density);
+                chain.decide(ln_y, ln_ratio, slot, rng, observer);
             }
             Err(why) => chain.fail(slot, why, observer),
         }
@@ -404,7 +478,7 @@ impl Method for Cmlt {
     type State = CmltState;
 
     fn groups(&self) -> usize {
-        self.max_edges
+        self.settings.max_edges
     }
 
     fn independent(&self, scene: &Scene, g: usize, seed: u64) -> CmltState {
@@ -454,8 +528,10 @@ impl Method for Cmlt {
             state.bootstrap_scaled = false;
         }
         chain.ln_density = Self::ln_target(&chain.state);
-        let p_swap = if self.swap_every > 0.0 {
-            1.0 / self.swap_every
+        let st = &self.settings;
+        // Replica exchange happens between chains, in `exchange` (below).
+        let p_swap = if st.swap_every > 0.0 && st.swaps == SwapKind::SerialTempering {
+            1.0 / st.swap_every
         } else {
             0.0
         };
@@ -463,9 +539,9 @@ impl Method for Cmlt {
             let v = uniform(rng);
             if v < p_swap {
                 self.swap(scene, chain, rng, observer);
-            } else if v < p_swap + (1.0 - p_swap) * self.ipsm {
+            } else if v < p_swap + (1.0 - p_swap) * st.ipsm {
                 self.ipsm(scene, chain, rng, observer);
-            } else if v < p_swap + (1.0 - p_swap) * (self.ipsm + self.pathspace) {
+            } else if v < p_swap + (1.0 - p_swap) * (st.ipsm + st.pathspace) {
                 self.path_space(scene, chain, rng, observer);
             } else {
                 self.in_chart(scene, chain, rng, observer);
@@ -473,10 +549,23 @@ impl Method for Cmlt {
         }
     }
 
+    fn exchange_every(&self) -> Option<u64> {
+        let st = &self.settings;
+        (st.swaps == SwapKind::ReplicaExchange && st.swap_every > 0.0)
+            .then(|| st.swap_every.round().max(1.0) as u64)
+    }
+
+    fn exchange(&self, scene: &Scene, chains: &mut [Chain<CmltState>], rng: &mut ChainRng) {
+        self.exchange_round(scene, chains, rng);
+    }
+
     fn kinds(&self) -> Vec<String> {
         KINDS
             .iter()
-            .map(|s| s.to_string())
+            .map(|&s| match (s, self.settings.swaps) {
+                ("chart swap", SwapKind::ReplicaExchange) => "replica exchange".to_string(),
+                _ => s.to_string(),
+            })
             .chain(
                 MutationKind::ALL
                     .iter()

@@ -2,9 +2,10 @@
 //! techniques as [`mcmc_charts`] charts with exact path inversion.
 
 pub mod integrator;
+pub mod replica;
 pub mod technique;
 
-pub use integrator::{Cmlt, CmltState};
+pub use integrator::{Cmlt, CmltSettings, CmltState, SwapKind};
 pub use technique::{
     TechniqueChart, camera_numbers, light_numbers, technique_charts, unit_integrand,
 };

@@ -55,6 +55,17 @@ pub trait Method: Sync {
     /// Told the per-group normalisations `b_g` once the bootstrap is done, before any chain runs
     /// (e.g. to choose path lengths in proportion to their energy).
     fn bootstrap_done(&self, _group_normalisation: &[f64]) {}
+    /// Mutations per chain between two calls of [`Method::exchange`]; `None` (the default): the
+    /// chains never interact.
+    fn exchange_every(&self) -> Option<u64> {
+        None
+    }
+    /// Moves between chains (e.g. replica exchange), called between sub-rounds of
+    /// [`Method::exchange_every`] mutations. They must leave the product of the chains'
+    /// stationary laws invariant and may depend on `rng` only for their randomness (determinism).
+    /// The driver does not record them on the film: each chain records its own mutations, so the
+    /// number of exchanges a chain takes part in does not weigh its samples.
+    fn exchange(&self, _scene: &Scene, _chains: &mut [Chain<Self::State>], _rng: &mut ChainRng) {}
 }
 
 /// How long to run the chains.
@@ -139,6 +150,7 @@ type Splat = ([f64; 2], Rgb);
 const BOOTSTRAP: u64 = 0xB007;
 const CHAINS: u64 = 0xC4A1;
 const SPLIT: usize = 16;
+const EXCHANGE: u64 = 0xE8C4;
 
 fn key(seed: u64, g: usize, i: usize) -> u64 {
     // Distinct stream keys for every (group, index) of the bootstrap.
@@ -291,6 +303,8 @@ pub fn run<M: Method>(
     let split = SPLIT.min(chains.len());
     let size = chains.len().div_ceil(split);
     let b = stats.normalisation;
+    let exchange_every = method.exchange_every();
+    let mut exchange_rng = substream(settings.seed, EXCHANGE, 0);
     loop {
         let k = match total {
             Some(t) => per_round
@@ -299,22 +313,28 @@ pub fn run<M: Method>(
             None => per_round,
         };
         let round_start = Instant::now();
-        let outputs: Vec<(Vec<Splat>, u64)> = chains
-            .par_chunks_mut(size)
-            .zip(rngs.par_chunks_mut(size))
-            .map(|(cs, rs)| {
-                crate::accel::take_ray_count();
-                let mut splats = Vec::new();
-                let mut rec = SplatRecorder {
-                    splats: &mut splats,
-                    b,
-                };
-                for (chain, rng) in cs.iter_mut().zip(rs.iter_mut()) {
-                    method.mutate(scene, chain, k, rng, &mut rec);
-                }
-                (splats, crate::accel::take_ray_count())
-            })
-            .collect();
+        let mut outputs: Vec<(Vec<Splat>, u64)> =
+            vec![Default::default(); chains.len().div_ceil(size)];
+        let mut left = k;
+        while left > 0 {
+            let step = exchange_every.map_or(left, |e| e.clamp(1, left));
+            chains
+                .par_chunks_mut(size)
+                .zip(rngs.par_chunks_mut(size))
+                .zip(outputs.par_iter_mut())
+                .for_each(|((cs, rs), (splats, rays))| {
+                    crate::accel::take_ray_count();
+                    let mut rec = SplatRecorder { splats, b };
+                    for (chain, rng) in cs.iter_mut().zip(rs.iter_mut()) {
+                        method.mutate(scene, chain, step, rng, &mut rec);
+                    }
+                    *rays += crate::accel::take_ray_count();
+                });
+            left -= step;
+            if exchange_every.is_some() {
+                method.exchange(scene, &mut chains, &mut exchange_rng);
+            }
+        }
         for (splats, rays) in outputs {
             for (r, v) in splats {
                 film.add_splat(r, v);

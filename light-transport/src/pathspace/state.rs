@@ -84,6 +84,18 @@ impl PathState {
             .sum()
     }
 
+    /// The balance-heuristic weight `w_s = p_s / Σ_{s'} p_{s'} = (1/I(C*_s)) / Σ_{s'} 1/I(C*_{s'})`
+    /// of strategy `s` (0 when it cannot produce the path).
+    pub fn balance_weight(&self, s: usize) -> f64 {
+        let i = self.strategy_importance(s);
+        let sum = self.inverse_sum(0, self.strategy.len());
+        if i > 0.0 && sum > 0.0 {
+            1.0 / (i * sum)
+        } else {
+            0.0
+        }
+    }
+
     /// `I(C*_s)` (0 when invalid or out of range).
     pub fn strategy_importance(&self, s: usize) -> f64 {
         self.strategy.get(s).copied().unwrap_or(0.0)
