@@ -23,7 +23,7 @@ pub enum Algo {
     /// Energy redistribution path tracing (Cline et al.): short perturbation chains from
     /// path-traced seeds.
     Erpt,
-    /// Charted MLT: technique charts with path inversion, chart swaps by serial tempering.
+    /// Charted MLT: technique charts with path inversion, chart swaps by serial tempering or replica exchange (--swaps).
     Cmlt,
 }
 
