@@ -3,7 +3,9 @@
 //! 1D marginals and coordinate pairs (chi-square, Bonferroni, family-wise α = 1e-4 per chart).
 //! Specular vertices (Cornell spheres, caustic glass, ring mirror) and layered materials (the
 //! door's plastic table) are covered. An inverse that always picks the first lobe of a layered
-//! material is caught (on a plastic floor filling the view).
+//! material is caught (on a plastic floor filling the view). The partial reparameterisation of
+//! chart swaps (§6.1) matches the full inverse, and one that leaves a newly sampled vertex's
+//! numbers uniform is caught.
 
 use light_transport::cmlt::{TechniqueChart, camera_numbers, technique_charts};
 use light_transport::math::DVec3;
@@ -231,6 +233,52 @@ fn rare_technique_charts_pass_the_checker_with_more_samples() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// Columns of the partial reparameterisation `s → s2` (after `tamper`) and of the full inverse of
+/// the same paths `x = T_s(U)`, `U` uniform (up to 1500 paths; `None` below 200), and the worst
+/// round-trip distances of the two.
+#[allow(clippy::type_complexity)]
+fn partial_and_full(
+    scene: &Scene,
+    k: usize,
+    (s, s2): (usize, usize),
+    tamper: impl Fn(&mut [f64], &mut ChainRng),
+) -> Option<(Vec<Vec<f64>>, Vec<Vec<f64>>, f64, f64)> {
+    let a = TechniqueChart::new(scene, k, s, ImportanceKind::Luminance).unwrap();
+    let b = TechniqueChart::new(scene, k, s2, ImportanceKind::Luminance).unwrap();
+    let mut rng = stream(77 + 10 * s as u64 + s2 as u64, 1);
+    let (mut x, mut y) = (PathState::default(), PathState::default());
+    let mut u = vec![0.0; a.dim()];
+    let (mut partial, mut full) = (vec![0.0; b.dim()], vec![0.0; b.dim()]);
+    let (mut pa, mut fu): (Vec<Vec<f64>>, Vec<Vec<f64>>) =
+        (vec![Vec::new(); b.dim()], vec![Vec::new(); b.dim()]);
+    let (mut worst_trip, mut worst_full) = (0.0f64, 0.0f64);
+    for _ in 0..400_000 {
+        u.iter_mut().for_each(|v| *v = uniform(&mut rng));
+        if !a.forward(&u, &mut x) || !(b.ln_density(&x) > f64::NEG_INFINITY) {
+            continue;
+        }
+        assert!(a.invert(&x, &mut u, &mut rng));
+        assert!(b.reparameterise(&x, &a, &u, &mut partial, &mut rng));
+        tamper(&mut partial, &mut rng);
+        assert!(b.invert(&x, &mut full, &mut rng));
+        if b.forward(&partial, &mut y) {
+            worst_trip = worst_trip.max(distance(&x, &y));
+        } else {
+            worst_trip = f64::INFINITY;
+        }
+        assert!(b.forward(&full, &mut y));
+        worst_full = worst_full.max(distance(&x, &y));
+        for c in 0..b.dim() {
+            pa[c].push(partial[c]);
+            fu[c].push(full[c]);
+        }
+        if pa[0].len() == 1500 {
+            break;
+        }
+    }
+    (pa[0].len() >= 200).then_some((pa, fu, worst_trip, worst_full))
+}
+
 /// Reparameterising a path from chart `s` to chart `s'` by inverting only the vertices whose
 /// numbers differ (§6.1) reproduces the path and gives numbers with the law of the full inverse:
 /// for paths `x = T_s(U)`, `U` uniform, each coordinate of the partial `U'` and of a full inverse
@@ -248,39 +296,13 @@ fn partial_reparameterisation_matches_the_full_inverse() {
                 if s == s2 {
                     continue;
                 }
-                let a = TechniqueChart::new(&scene, k, s, ImportanceKind::Luminance).unwrap();
-                let b = TechniqueChart::new(&scene, k, s2, ImportanceKind::Luminance).unwrap();
-                let mut rng = stream(77 + 10 * s as u64 + s2 as u64, 1);
-                let (mut x, mut y) = (PathState::default(), PathState::default());
-                let mut u = vec![0.0; a.dim()];
-                let (mut partial, mut full) = (vec![0.0; b.dim()], vec![0.0; b.dim()]);
-                let (mut pa, mut fu): (Vec<Vec<f64>>, Vec<Vec<f64>>) =
-                    (vec![Vec::new(); b.dim()], vec![Vec::new(); b.dim()]);
-                for _ in 0..400_000 {
-                    u.iter_mut().for_each(|v| *v = uniform(&mut rng));
-                    if !a.forward(&u, &mut x) || !(b.ln_density(&x) > f64::NEG_INFINITY) {
-                        continue;
-                    }
-                    assert!(a.invert(&x, &mut u, &mut rng));
-                    assert!(b.reparameterise(&x, &a, &u, &mut partial, &mut rng));
-                    assert!(b.invert(&x, &mut full, &mut rng));
-                    assert!(b.forward(&partial, &mut y), "{name} {s}→{s2}: path lost");
-                    let d_partial = distance(&x, &y);
-                    assert!(b.forward(&full, &mut y));
-                    let d_full = distance(&x, &y);
-                    worst_trip = worst_trip.max(d_partial);
-                    worst_full = worst_full.max(d_full);
-                    for c in 0..b.dim() {
-                        pa[c].push(partial[c]);
-                        fu[c].push(full[c]);
-                    }
-                    if pa[0].len() == 1500 {
-                        break;
-                    }
-                }
-                if pa[0].len() < 200 {
+                let Some((pa, fu, trip, full)) = partial_and_full(&scene, k, (s, s2), |_, _| {})
+                else {
                     continue;
-                }
+                };
+                assert!(trip.is_finite(), "{name} {s}→{s2}: path lost");
+                worst_trip = worst_trip.max(trip);
+                worst_full = worst_full.max(full);
                 for (c1, c2) in pa.into_iter().zip(fu) {
                     p_values.push(mcmc_core::balance::invariance::ks_two_sample(c1, c2).1);
                 }
@@ -300,4 +322,37 @@ fn partial_reparameterisation_matches_the_full_inverse() {
         min * n as f64 > 1e-4,
         "smallest p = {min:.2e} over {n} tests"
     );
+}
+
+/// The test above, on a deliberately broken partial inverse: moving from `t` to `t + 1` camera
+/// vertices, the numbers of camera vertex `t − 1` (a connection endpoint before, a sampled vertex
+/// now) are treated as unread and drawn uniformly instead of inverted. The path is usually lost
+/// and the KS tests of that vertex's block see the wrong law.
+#[test]
+fn a_partial_inverse_that_leaves_a_new_sampled_vertex_uniform_is_caught() {
+    let scene = Scene::new(&builtin::builtin("door").unwrap(), Some((32, 24))).unwrap();
+    let k = 3;
+    let mut p_values = Vec::new();
+    for s in 1..=k {
+        let t = k + 1 - s;
+        if t < 2 {
+            continue;
+        }
+        // Camera vertex b = t − 1 has its block at CAMERA_BLOCK + (b − 1) · VERTEX_BLOCK.
+        let at = camera_numbers(t);
+        let forget = |u: &mut [f64], rng: &mut ChainRng| {
+            u[at..at + 4].iter_mut().for_each(|v| *v = uniform(rng));
+        };
+        let Some((pa, fu, _, _)) = partial_and_full(&scene, k, (s, s - 1), forget) else {
+            continue;
+        };
+        for (c1, c2) in pa.into_iter().zip(fu).skip(at).take(4) {
+            p_values.push(mcmc_core::balance::invariance::ks_two_sample(c1, c2).1);
+        }
+    }
+    let n = p_values.len();
+    let min = p_values.iter().cloned().fold(1.0, f64::min);
+    println!("broken partial inverse: {n} KS tests, smallest p = {min:.2e}");
+    assert!(n >= 4);
+    assert!(min * n as f64 <= 1e-4, "not caught: smallest p = {min:.2e}");
 }
