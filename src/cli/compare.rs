@@ -137,7 +137,7 @@ fn track<E: Estimator>(
     cp.finish()?;
     eprintln!(
         "  {name}: {} samples per pixel in {:.1} s, {:.2} M rays/s",
-        stats.passes,
+        super::render::spp_text(stats.samples_per_pixel),
         stats.elapsed.as_secs_f64(),
         stats.rays as f64 / stats.elapsed.as_secs_f64().max(1e-9) / 1e6
     );

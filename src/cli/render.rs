@@ -245,6 +245,7 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
             let pixels = (scene.camera.width * scene.camera.height) as u64;
             let rs = RenderStats {
                 passes: s.mutations / pixels.max(1),
+                samples_per_pixel: s.mutations as f64 / pixels.max(1) as f64,
                 samples: s.mutations,
                 rays: s.rays,
                 elapsed: s.bootstrap_time + s.seed_time + s.chain_time,
@@ -260,7 +261,7 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
     super::shard::write_info(
         &exr,
         &super::shard::ShardInfo {
-            samples: stats.passes as f64,
+            samples: stats.samples_per_pixel,
             seed: a.options.seed,
             algo: a.algo.name().into(),
         },
@@ -291,7 +292,7 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
     );
     println!(
         "samples    {} spp, {:.2} M samples/s",
-        stats.passes,
+        spp_text(stats.samples_per_pixel),
         stats.samples as f64 / secs / 1e6
     );
     println!(
@@ -308,4 +309,13 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
     }
     println!("wrote      {} and {}", exr.display(), png.display());
     Ok(())
+}
+
+/// Samples per pixel for people: whole numbers as such, a fractional last pass with two decimals.
+pub fn spp_text(spp: f64) -> String {
+    if spp.fract() == 0.0 {
+        format!("{spp}")
+    } else {
+        format!("{spp:.2}")
+    }
 }

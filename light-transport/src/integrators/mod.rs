@@ -5,6 +5,13 @@
 //! light path per pixel). The pixels of a pass are split into fixed chunks processed in parallel;
 //! every sample draws from its own stream (`seed`, pass, pixel), and chunk results are merged in
 //! chunk order, so images are bit-identical whatever the number of threads.
+//!
+//! Time budgets end with a *fractional pass* instead of overshooting by up to a whole pass: when
+//! the time left is a fraction `q < 1` of the last pass's duration, every pixel takes part in the
+//! last pass independently with probability `q` (its own stream decides), and the splats of that
+//! pass count as `q` of a pass. Pixel estimates stay unbiased (each pixel averages however many
+//! samples it got), and so do splat images: the expected splat sum of the last pass is `q` times a
+//! full pass's, and the splat normalisation grows by exactly `q`.
 
 mod bdpt;
 mod lt;
@@ -18,6 +25,7 @@ use crate::film::Film;
 use crate::sampler::IndependentStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
+use mcmc_core::rng::uniform;
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
@@ -49,7 +57,8 @@ pub trait Estimator: Sync {
 pub enum Budget {
     /// A number of samples per pixel.
     SamplesPerPixel(u64),
-    /// Wall-clock time (whole passes; at least one).
+    /// Wall-clock time (at least one whole pass; the last pass may be fractional, see the module
+    /// docs).
     Time(Duration),
 }
 
@@ -69,8 +78,11 @@ pub struct Progress {
 /// Statistics of a finished render.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct RenderStats {
-    /// Passes (= samples per pixel).
+    /// Passes started (the last one may have been fractional).
     pub passes: u64,
+    /// Passes' worth of samples: `passes`, or `passes − 1 + q` after a fractional last pass (the
+    /// weight of this render when shards are merged).
+    pub samples_per_pixel: f64,
     /// Samples taken.
     pub samples: u64,
     /// Rays traced.
@@ -86,6 +98,7 @@ const CHUNKS: usize = 64;
 /// What a chunk of a pass produces: pixel estimates, splats, rays traced.
 type ChunkResult = (Vec<(usize, Rgb)>, Vec<Splat>, u64);
 const PASS_PURPOSE: u64 = 0x5eed_0001;
+const FRACTION_PURPOSE: u64 = 0x5eed_0002;
 
 /// Render `estimator` into a film within `budget`; `progress` is called after every pass and may
 /// stop the render early by returning `false`.
@@ -96,54 +109,37 @@ pub fn render<E: Estimator>(
     seed: u64,
     mut progress: impl FnMut(&Film, Progress) -> bool,
 ) -> (Film, RenderStats) {
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let npix = w * h;
-    let mut film = Film::new(w, h);
+    let mut film = Film::new(scene.camera.width, scene.camera.height);
     let start = Instant::now();
     let mut stats = RenderStats::default();
     let planned = match budget {
         Budget::SamplesPerPixel(n) => Some(n.max(1)),
         Budget::Time(_) => None,
     };
-    let chunk = npix.div_ceil(CHUNKS);
+    let mut last_pass: Option<Duration> = None;
     loop {
-        let pass = stats.passes;
-        let results: Vec<ChunkResult> = (0..CHUNKS)
-            .into_par_iter()
-            .map(|c| {
-                crate::accel::take_ray_count();
-                let lo = (c * chunk).min(npix);
-                let hi = ((c + 1) * chunk).min(npix);
-                let mut samples = Vec::with_capacity(hi - lo);
-                let mut splats = Vec::new();
-                for pixel in lo..hi {
-                    let mut stream = IndependentStream::new(mcmc_core::rng::substream(
-                        seed ^ pass.wrapping_mul(0x9E37_79B9_7F4A_7C15),
-                        PASS_PURPOSE,
-                        pixel as u64,
-                    ));
-                    let v = estimator.sample(scene, pixel, &mut stream, &mut splats);
-                    samples.push((pixel, v));
-                }
-                (samples, splats, crate::accel::take_ray_count())
-            })
-            .collect();
-        for (samples, splats, rays) in results {
-            if estimator.has_pixel_estimate() {
-                for (p, v) in samples {
-                    film.add_sample(p, v);
-                }
+        // The share of the pixels this pass samples: 1, or the fraction of a pass the time left
+        // allows when less than a whole pass remains.
+        let q = match (budget, last_pass) {
+            (Budget::Time(t), Some(d)) if !d.is_zero() => {
+                (t.saturating_sub(start.elapsed()).as_secs_f64() / d.as_secs_f64()).min(1.0)
             }
-            for (r, v) in splats {
-                film.add_splat(r, v);
-            }
-            stats.rays += rays;
-        }
-        if estimator.splats() {
-            film.splat_scale += 1.0;
-        }
+            _ => 1.0,
+        };
+        let pass_start = Instant::now();
+        let taken = pass(
+            scene,
+            estimator,
+            seed,
+            stats.passes,
+            q,
+            &mut film,
+            &mut stats.rays,
+        );
         stats.passes += 1;
-        stats.samples += npix as u64;
+        stats.samples += taken;
+        stats.samples_per_pixel += q;
+        last_pass = Some(pass_start.elapsed());
         let elapsed = start.elapsed();
         let go_on = progress(
             &film,
@@ -156,7 +152,7 @@ pub fn render<E: Estimator>(
         );
         let done = match budget {
             Budget::SamplesPerPixel(n) => stats.passes >= n.max(1),
-            Budget::Time(t) => elapsed >= t,
+            Budget::Time(t) => q < 1.0 || elapsed >= t,
         };
         if done || !go_on {
             break;
@@ -165,6 +161,70 @@ pub fn render<E: Estimator>(
     stats.elapsed = start.elapsed();
     stats.discarded = film.discarded;
     (film, stats)
+}
+
+/// One pass of `estimator` into `film`: every pixel with probability `q` (all of them when
+/// `q ≥ 1`), its splats counted as `q` of a pass (see the module docs). Returns the samples taken
+/// and adds the rays traced to `rays`. Deterministic in `(seed, pass)`, whatever the thread count.
+pub fn pass<E: Estimator>(
+    scene: &Scene,
+    estimator: &E,
+    seed: u64,
+    pass: u64,
+    q: f64,
+    film: &mut Film,
+    rays: &mut u64,
+) -> u64 {
+    let npix = scene.camera.width * scene.camera.height;
+    let chunk = npix.div_ceil(CHUNKS);
+    let q = q.clamp(0.0, 1.0);
+    let key = seed ^ pass.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let results: Vec<ChunkResult> = (0..CHUNKS)
+        .into_par_iter()
+        .map(|c| {
+            crate::accel::take_ray_count();
+            let lo = (c * chunk).min(npix);
+            let hi = ((c + 1) * chunk).min(npix);
+            let mut samples = Vec::with_capacity(hi - lo);
+            let mut splats = Vec::new();
+            for pixel in lo..hi {
+                if q < 1.0
+                    && uniform(&mut mcmc_core::rng::substream(
+                        key,
+                        FRACTION_PURPOSE,
+                        pixel as u64,
+                    )) >= q
+                {
+                    continue;
+                }
+                let mut stream = IndependentStream::new(mcmc_core::rng::substream(
+                    key,
+                    PASS_PURPOSE,
+                    pixel as u64,
+                ));
+                let v = estimator.sample(scene, pixel, &mut stream, &mut splats);
+                samples.push((pixel, v));
+            }
+            (samples, splats, crate::accel::take_ray_count())
+        })
+        .collect();
+    let mut taken = 0;
+    for (samples, splats, r) in results {
+        taken += samples.len() as u64;
+        if estimator.has_pixel_estimate() {
+            for (p, v) in samples {
+                film.add_sample(p, v);
+            }
+        }
+        for (r, v) in splats {
+            film.add_splat(r, v);
+        }
+        *rays += r;
+    }
+    if estimator.splats() {
+        film.splat_scale += q;
+    }
+    taken
 }
 
 /// Film `[0,1)²` position of a sample in `pixel`: uniform within the pixel.
