@@ -96,7 +96,13 @@ impl<'a> Checkpoints<'a> {
 
     /// Record any checkpoint passed; `false` once the time is up or on error.
     fn see(&mut self, film: &Film, elapsed: Duration, spp: u64) -> bool {
-        while self.next < self.marks.len() && elapsed >= self.marks[self.next] {
+        self.record(film, elapsed, spp, false)
+    }
+
+    /// Record the checkpoints `elapsed` has reached (all the remaining ones when `last`: a time
+    /// budget's fractional last pass may end a hair before the budget).
+    fn record(&mut self, film: &Film, elapsed: Duration, spp: u64, last: bool) -> bool {
+        while self.next < self.marks.len() && (last || elapsed >= self.marks[self.next]) {
             match metrics(&Image::from_film(film), self.reference) {
                 Ok(m) => self.rows.push(Row {
                     algo: self.name,
@@ -134,6 +140,7 @@ fn track<E: Estimator>(
         a.options.seed,
         |film, p| cp.see(film, p.elapsed, p.passes),
     );
+    cp.record(&film, stats.elapsed, stats.passes, true);
     cp.finish()?;
     eprintln!(
         "  {name}: {} samples per pixel in {:.1} s, {:.2} M rays/s",
