@@ -243,7 +243,12 @@ impl Cmlt {
         })
     }
 
-    fn chart<'a>(&self, scene: &'a Scene, k: usize, s: usize) -> Option<TechniqueChart<'a>> {
+    pub(super) fn chart<'a>(
+        &self,
+        scene: &'a Scene,
+        k: usize,
+        s: usize,
+    ) -> Option<TechniqueChart<'a>> {
         TechniqueChart::new(scene, k, s, self.settings.importance)
     }
 

@@ -26,7 +26,6 @@
 
 use super::Cmlt;
 use super::integrator::{CmltState, SWAP, SwapKind};
-use super::technique::TechniqueChart;
 use crate::scene::Scene;
 use mcmc_charts::Chart;
 use mcmc_core::kernel::acceptance;
@@ -91,11 +90,7 @@ impl Cmlt {
         if ln_ratio.is_nan() || a.bootstrap_scaled || b.bootstrap_scaled || b.k != k {
             return Outcome::NotApplicable;
         }
-        let imp = self.settings.importance;
-        let (Some(ci), Some(cj)) = (
-            TechniqueChart::new(scene, k, i, imp),
-            TechniqueChart::new(scene, k, j, imp),
-        ) else {
+        let (Some(ci), Some(cj)) = (self.chart(scene, k, i), self.chart(scene, k, j)) else {
             return Outcome::NotApplicable;
         };
         let (p, _) = acceptance(0.0, 0.0, ln_ratio);
