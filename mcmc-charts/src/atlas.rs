@@ -1,6 +1,9 @@
 //! An atlas: the family of charts a charted chain may move between, optionally with the identity
 //! chart (`U = Ω`, `p = 1`), which lets target-space moves (e.g. path-space mutations) join the
 //! family; then `p = 1` also enters the denominator of the weighted targets (paper §4).
+//!
+//! An atlas holds charts of one type `C`: boxed trait objects by default (any mix of charts), or a
+//! concrete chart type, which lets chart swaps use the charts' [`Chart::partial_inverse`].
 
 use crate::Chart;
 use mcmc_core::ChainRng;
@@ -38,7 +41,7 @@ impl<X: Default> ChartState<X> {
 
 impl<X> ChartState<X> {
     /// A state in target space (the identity chart of `atlas`) at `x`.
-    pub fn at_point<Y>(atlas: &Atlas<Y>, x: X) -> Self {
+    pub fn at_point<Y, C: Chart<Y>>(atlas: &Atlas<Y, C>, x: X) -> Self {
         Self {
             chart: atlas.identity(),
             u: Vec::new(),
@@ -51,15 +54,14 @@ impl<X> ChartState<X> {
     }
 }
 
-type BoxedChart<X> = Box<dyn Chart<X>>;
-
 /// A family of sampling charts of one target space.
-pub struct Atlas<X> {
-    charts: Vec<BoxedChart<X>>,
+pub struct Atlas<X, C = Box<dyn Chart<X>>> {
+    charts: Vec<C>,
     with_identity: bool,
+    _point: std::marker::PhantomData<fn(&X)>,
 }
 
-impl<X> std::fmt::Debug for Atlas<X> {
+impl<X, C: Chart<X>> std::fmt::Debug for Atlas<X, C> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Atlas")
             .field(
@@ -71,12 +73,13 @@ impl<X> std::fmt::Debug for Atlas<X> {
     }
 }
 
-impl<X> Atlas<X> {
+impl<X, C: Chart<X>> Atlas<X, C> {
     /// An atlas of `charts` (no identity chart).
-    pub fn new(charts: Vec<BoxedChart<X>>) -> Self {
+    pub fn new(charts: Vec<C>) -> Self {
         Self {
             charts,
             with_identity: false,
+            _point: std::marker::PhantomData,
         }
     }
 
@@ -97,8 +100,8 @@ impl<X> Atlas<X> {
     }
 
     /// The chart at `index` (`None` for the identity level).
-    pub fn chart(&self, index: usize) -> Option<&dyn Chart<X>> {
-        self.charts.get(index).map(|c| c.as_ref())
+    pub fn chart(&self, index: usize) -> Option<&C> {
+        self.charts.get(index)
     }
 
     /// Whether the identity chart is part of the atlas.
@@ -138,8 +141,8 @@ impl<X> Atlas<X> {
         }
     }
 
-    /// Re-parameterise the point of `from` in chart `to`: `to.u ~ R_to(x)`, copying the cached
-    /// evaluation. Returns the Green ratio `ln p_to(x) − ln p_from(x) + ln λ_from(u) − ln λ_to(u')`
+    /// Re-parameterise the point of `from` in chart `to`: `to.u ~ R_to(x)` (through
+    /// [`Chart::partial_inverse`] when both levels are charts), copying the cached evaluation. Returns the Green ratio `ln p_to(x) − ln p_from(x) + ln λ_from(u) − ln λ_to(u')`
     /// (λ: the charts' inverse biases), or `-inf` when the point is not in the image of `to`.
     pub fn reparameterise(
         &self,
@@ -168,9 +171,12 @@ impl<X> Atlas<X> {
             to.valid = false;
             return f64::NEG_INFINITY;
         }
-        if let Some(c) = self.chart(to_chart)
-            && !c.invert(&from.x, &mut to.u, rng)
-        {
+        let inverted = match (self.chart(to_chart), self.chart(from.chart)) {
+            (Some(c), Some(f)) => c.partial_inverse(&from.x, f, &from.u, &mut to.u, rng),
+            (Some(c), None) => c.invert(&from.x, &mut to.u, rng),
+            (None, _) => true,
+        };
+        if !inverted {
             to.valid = false;
             return f64::NEG_INFINITY;
         }

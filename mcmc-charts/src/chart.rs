@@ -30,6 +30,29 @@ pub trait Chart<X>: Send + Sync {
     /// image of `T_i`.
     fn invert(&self, x: &X, u: &mut [f64], rng: &mut ChainRng) -> bool;
 
+    /// Draw `u ~ κ_i(·|x)` for a point `x` that chart `from` reaches with coordinates `u_from`
+    /// (drawn from `from`'s inverse): the hook for charts whose coordinates share parts with other
+    /// charts of their family (charted-MLT paper §6.1: two technique charts of one path share the
+    /// numbers of every vertex both sample the same way). Such a chart may keep those parts of
+    /// `u_from` and invert only the rest. **Contract:** the pair `(u_from, u)` must have the same
+    /// law as `(u, u_from)` would when the roles of the two charts are exchanged, e.g. shared parts
+    /// copied and the rest drawn from its exact conditional law; then `u` follows `κ_i(·|x)` and
+    /// every swap built on it stays exact. The default ignores `from` and inverts in full.
+    fn partial_inverse(
+        &self,
+        x: &X,
+        from: &Self,
+        u_from: &[f64],
+        u: &mut [f64],
+        rng: &mut ChainRng,
+    ) -> bool
+    where
+        Self: Sized,
+    {
+        let _ = (from, u_from);
+        self.invert(x, u, rng)
+    }
+
     /// `ln (dρ_i/dκ_i)(u)` where `ρ_i(·|x)` is the law [`Chart::invert`] actually samples and `κ_i`
     /// the exact conditional law; zero (the default) for a chart that honours the contract. For a
     /// finite choice of branches this is `ln(P_used(branch) / P_exact(branch))`.

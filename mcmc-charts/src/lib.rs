@@ -65,4 +65,4 @@ mod target;
 
 pub use atlas::{Atlas, ChartState};
 pub use chart::Chart;
-pub use target::{ChartedTarget, Integrand, TargetKind};
+pub use target::{ChartedTarget, Integrand, Joint, TargetKind};

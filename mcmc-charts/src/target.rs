@@ -13,8 +13,9 @@
 //! Colour (§3.4): `f` is the scalar importance `f*` (e.g. the maximum RGB component) of the
 //! [`Integrand`]; a recorder re-weights each recorded point by `f(x) / f*(x)`.
 
-use crate::{Atlas, ChartState};
-use mcmc_core::{ChainRng, Family};
+use crate::{Atlas, Chart, ChartState};
+use mcmc_core::rng::{categorical, uniform};
+use mcmc_core::{ChainRng, Family, Target};
 
 /// The scalar importance `f*(x) ≥ 0` a charted chain samples.
 pub trait Integrand<X>: Sync {
@@ -49,18 +50,18 @@ impl<X> std::fmt::Debug for TargetKind<X> {
 }
 
 /// The per-chart targets over an atlas; implements [`Family`] with chart swaps as transfers.
-pub struct ChartedTarget<'a, X, I> {
+pub struct ChartedTarget<'a, X, I, C = Box<dyn Chart<X>>> {
     /// The atlas.
-    pub atlas: &'a Atlas<X>,
+    pub atlas: &'a Atlas<X, C>,
     /// The integrand.
     pub integrand: I,
     /// The kind of target.
     pub kind: TargetKind<X>,
 }
 
-impl<'a, X, I: Integrand<X>> ChartedTarget<'a, X, I> {
+impl<'a, X, I: Integrand<X>, C: Chart<X>> ChartedTarget<'a, X, I, C> {
     /// The targets of `kind` for `integrand` over `atlas`.
-    pub fn new(atlas: &'a Atlas<X>, integrand: I, kind: TargetKind<X>) -> Self {
+    pub fn new(atlas: &'a Atlas<X, C>, integrand: I, kind: TargetKind<X>) -> Self {
         Self {
             atlas,
             integrand,
@@ -76,6 +77,18 @@ impl<'a, X, I: Integrand<X>> ChartedTarget<'a, X, I> {
         if let Some(c) = self.atlas.chart(s.chart) {
             s.valid = s.u.len() == c.dim() && c.forward(&s.u, &mut s.x);
         }
+        self.evaluate_point(s);
+    }
+
+    /// Evaluate the integrand and every chart's density at the state's point `s.x`, which is
+    /// taken to be a valid point (a target-space move just placed it there); the coordinates are
+    /// left as they are.
+    pub fn refresh_point(&self, s: &mut ChartState<X>) {
+        s.valid = true;
+        self.evaluate_point(s);
+    }
+
+    fn evaluate_point(&self, s: &mut ChartState<X>) {
         if s.valid {
             s.importance = self.integrand.importance(&s.x);
             self.atlas.ln_densities(&s.x, &mut s.ln_p);
@@ -86,6 +99,34 @@ impl<'a, X, I: Integrand<X>> ChartedTarget<'a, X, I> {
             s.importance = 0.0;
         }
         s.fresh = true;
+    }
+
+    /// `ln Σ_k c_k π̄_k(x)`: the point marginal of a chain over (chart, coordinates) with joint
+    /// target `c_k π_k(u)`, at an evaluated valid state (`ln_weights = ln c`).
+    pub fn ln_marginal(&self, s: &ChartState<X>, ln_weights: &[f64]) -> f64 {
+        let terms: Vec<f64> = (0..self.atlas.levels())
+            .map(|k| ln_weights[k] + self.ln_target_space_density(k, s))
+            .collect();
+        mcmc_core::proposals::log_sum_exp(&terms)
+    }
+
+    /// Draw a level `k` with probability `c_k π̄_k(x) / Σ_j c_j π̄_j(x)`: the conditional law of
+    /// the chart given the point under the joint target (`None` when every term is zero).
+    pub fn draw_level(
+        &self,
+        s: &ChartState<X>,
+        ln_weights: &[f64],
+        rng: &mut ChainRng,
+    ) -> Option<usize> {
+        let terms: Vec<f64> = (0..self.atlas.levels())
+            .map(|k| ln_weights[k] + self.ln_target_space_density(k, s))
+            .collect();
+        let top = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if !top.is_finite() {
+            return None;
+        }
+        let w: Vec<f64> = terms.iter().map(|t| (t - top).exp()).collect();
+        categorical(&w, uniform(rng))
     }
 
     /// `ln Σ_k p_k(x)` of an evaluated state.
@@ -110,7 +151,7 @@ impl<'a, X, I: Integrand<X>> ChartedTarget<'a, X, I> {
     }
 }
 
-impl<X: Clone, I: Integrand<X>> Family<ChartState<X>> for ChartedTarget<'_, X, I> {
+impl<X: Clone, I: Integrand<X>, C: Chart<X>> Family<ChartState<X>> for ChartedTarget<'_, X, I, C> {
     fn levels(&self) -> usize {
         self.atlas.levels()
     }
@@ -156,5 +197,69 @@ impl<X: Clone, I: Integrand<X>> Family<ChartState<X>> for ChartedTarget<'_, X, I
             self.refresh(&mut src);
             self.atlas.reparameterise(&src, to, y, rng)
         }
+    }
+}
+
+/// The joint target `c_k π_k(u)` of a chain over (chart, coordinates): a [`Target`] for
+/// Metropolis–Hastings kernels whose moves change the chart ([`crate::moves::ChartSwap`], the
+/// Gibbs refresh of [`crate::moves::Refresh`]). Its point marginal is `Σ_k c_k π̄_k`; with the
+/// weighted targets and equal pseudo-priors that is the integrand itself (eq. 17).
+pub struct Joint<'a, X, I, C = Box<dyn Chart<X>>> {
+    /// The per-chart targets.
+    pub target: &'a ChartedTarget<'a, X, I, C>,
+    /// `ln c_k`, one per level.
+    pub ln_weights: Vec<f64>,
+}
+
+impl<'a, X, I: Integrand<X>, C: Chart<X>> Joint<'a, X, I, C> {
+    /// Equal pseudo-priors (`c_k = 1`).
+    pub fn new(target: &'a ChartedTarget<'a, X, I, C>) -> Self {
+        Self {
+            ln_weights: vec![0.0; target.atlas.levels()],
+            target,
+        }
+    }
+
+    /// Pseudo-priors `ln c_k` (one finite value per level).
+    pub fn with_weights(
+        target: &'a ChartedTarget<'a, X, I, C>,
+        ln_weights: Vec<f64>,
+    ) -> Result<Self, mcmc_core::McmcError> {
+        if ln_weights.len() != target.atlas.levels() || ln_weights.iter().any(|w| !w.is_finite()) {
+            return Err(mcmc_core::McmcError::InvalidParameter {
+                name: "ln_weights",
+                reason: format!(
+                    "need one finite log weight per level ({}), got {:?}",
+                    target.atlas.levels(),
+                    ln_weights
+                ),
+            });
+        }
+        Ok(Self { target, ln_weights })
+    }
+}
+
+impl<X: Clone, I: Integrand<X>, C: Chart<X>> Target<ChartState<X>> for Joint<'_, X, I, C> {
+    fn ln_density(&self, x: &ChartState<X>) -> f64 {
+        let mut y = x.clone();
+        self.evaluate(&mut y)
+    }
+
+    fn evaluate(&self, x: &mut ChartState<X>) -> f64 {
+        let l = self.target.ln_density(x.chart, x);
+        if l == f64::NEG_INFINITY || l.is_nan() {
+            return l;
+        }
+        self.ln_weights[x.chart] + l
+    }
+}
+
+impl<X: Clone, I: Integrand<X>, C: Chart<X>> Target<ChartState<X>> for &Joint<'_, X, I, C> {
+    fn ln_density(&self, x: &ChartState<X>) -> f64 {
+        (**self).ln_density(x)
+    }
+
+    fn evaluate(&self, x: &mut ChartState<X>) -> f64 {
+        (**self).evaluate(x)
     }
 }

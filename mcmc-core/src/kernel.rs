@@ -184,6 +184,10 @@ impl<S, T: Target<S>, P: Proposal<S>> Kernel<S> for MetropolisHastings<T, P> {
         let p = self
             .proposal
             .propose(&chain.state, &mut chain.candidate, rng);
+        if let Some(why) = p.failure {
+            chain.fail(p.kind, why, observer);
+            return;
+        }
         let l = self.target.evaluate(&mut chain.candidate);
         chain.decide(l, p.ln_ratio, p.kind, rng, observer);
     }

@@ -183,10 +183,7 @@ impl Proposal<PrimarySample> for Kelemen {
         }
         // The candidate draws its lazy coordinates from its own generator, seeded from the chain's.
         y.rng = ChainRng::seed_from_u64(rng.next_u64());
-        Proposed {
-            ln_ratio: 0.0,
-            kind: if y.large { LARGE_STEP } else { SMALL_STEP },
-        }
+        Proposed::new(0.0, if y.large { LARGE_STEP } else { SMALL_STEP })
     }
 
     fn kinds(&self) -> Vec<String> {

@@ -4,7 +4,7 @@
 //! (zero for a symmetric proposal, `ln q(x) − ln q(y)` for an independence sampler) together with a
 //! *kind*, the index of the move type that produced it, so acceptance can be reported per move type.
 
-use crate::ChainRng;
+use crate::{ChainRng, Failure};
 
 /// What a proposal reports with its candidate.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -13,6 +13,10 @@ pub struct Proposed {
     pub ln_ratio: f64,
     /// Index of the move type that produced the candidate (see [`Proposal::kinds`]).
     pub kind: usize,
+    /// Set when no candidate could be made (the move does not apply to `x`, or its construction
+    /// failed part-way): the kernel then counts the failure and stays, recording the current state
+    /// as a rejected proposal ([`crate::Chain::fail`]); the content of `y` is unspecified.
+    pub failure: Option<Failure>,
 }
 
 impl Proposed {
@@ -20,11 +24,30 @@ impl Proposed {
     pub const SYMMETRIC: Proposed = Proposed {
         ln_ratio: 0.0,
         kind: 0,
+        failure: None,
     };
 
     /// A move of kind 0 with the given log ratio.
     pub fn with_ratio(ln_ratio: f64) -> Self {
-        Self { ln_ratio, kind: 0 }
+        Self::new(ln_ratio, 0)
+    }
+
+    /// A move of `kind` with the given log ratio.
+    pub fn new(ln_ratio: f64, kind: usize) -> Self {
+        Self {
+            ln_ratio,
+            kind,
+            failure: None,
+        }
+    }
+
+    /// No candidate of `kind` could be made, for reason `why`.
+    pub fn failed(kind: usize, why: Failure) -> Self {
+        Self {
+            ln_ratio: f64::NEG_INFINITY,
+            kind,
+            failure: Some(why),
+        }
     }
 }
 
@@ -41,6 +64,30 @@ pub trait Proposal<S> {
     fn ln_transition_density(&self, from: &S, to: &S) -> Option<f64> {
         let _ = (from, to);
         None
+    }
+
+    /// `(ln q(y|x), ln q(x|y))` for a candidate `y` just proposed from `x` by this proposal or by
+    /// another component of the same mixture. A proposal whose candidates carry an auxiliary
+    /// record of how they were made (which part of a path was regenerated, say) evaluates both
+    /// densities *for that record*: the forward density of making `y` with it, and the reverse
+    /// density of making `x` from `y` with the reversed record. The combined mixture rule sums
+    /// these over components, which is exact on the space extended by the record. The default
+    /// evaluates [`Proposal::ln_transition_density`] both ways.
+    fn ln_pair_densities(&self, x: &S, y: &S) -> Option<(f64, f64)> {
+        Some((
+            self.ln_transition_density(x, y)?,
+            self.ln_transition_density(y, x)?,
+        ))
+    }
+
+    /// How suitable the proposal is for moving `x`: a non-negative weight, 0 when it cannot move
+    /// `x` at all (a perturbation of a path without the vertices it needs). A mixture built with
+    /// [`crate::proposals::Selection::Suitability`] chooses components in proportion to their base
+    /// weight times this value and puts the selection probabilities in the ratio, so the choice
+    /// stays exact. The default is 1 (always suitable).
+    fn suitability(&self, x: &S) -> f64 {
+        let _ = x;
+        1.0
     }
 
     /// `ln q(to, kind | from)`: the density of drawing `to` by a move of `kind`, on the space in
@@ -79,6 +126,12 @@ impl<S, P: Proposal<S> + ?Sized> Proposal<S> for &P {
     fn ln_move_density(&self, from: &S, to: &S, kind: usize) -> Option<f64> {
         (**self).ln_move_density(from, to, kind)
     }
+    fn ln_pair_densities(&self, x: &S, y: &S) -> Option<(f64, f64)> {
+        (**self).ln_pair_densities(x, y)
+    }
+    fn suitability(&self, x: &S) -> f64 {
+        (**self).suitability(x)
+    }
     fn outcomes(&self, x: &S) -> Option<Vec<Outcome<S>>> {
         (**self).outcomes(x)
     }
@@ -96,6 +149,12 @@ impl<S, P: Proposal<S> + ?Sized> Proposal<S> for Box<P> {
     }
     fn ln_move_density(&self, from: &S, to: &S, kind: usize) -> Option<f64> {
         (**self).ln_move_density(from, to, kind)
+    }
+    fn ln_pair_densities(&self, x: &S, y: &S) -> Option<(f64, f64)> {
+        (**self).ln_pair_densities(x, y)
+    }
+    fn suitability(&self, x: &S) -> f64 {
+        (**self).suitability(x)
     }
     fn outcomes(&self, x: &S) -> Option<Vec<Outcome<S>>> {
         (**self).outcomes(x)

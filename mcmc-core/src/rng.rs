@@ -46,6 +46,20 @@ pub fn uniform(rng: &mut ChainRng) -> f64 {
     (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }
 
+/// A uniform index in `0 .. n` from a uniform number `u` in `[0, 1)` (`n ≥ 1`; rounding at the
+/// top end falls to `n − 1`).
+///
+/// ```
+/// use mcmc_core::rng::uniform_index;
+/// assert_eq!(uniform_index(0.0, 3), 0);
+/// assert_eq!(uniform_index(0.5, 3), 1);
+/// assert_eq!(uniform_index(0.999_999_999_999_999_9, 3), 2);
+/// ```
+#[inline]
+pub fn uniform_index(u: f64, n: usize) -> usize {
+    ((u * n as f64) as usize).min(n.saturating_sub(1))
+}
+
 /// The index drawn with probability proportional to `weights` by the uniform number `u` in
 /// `[0, 1)` (inverse of the cumulative sum; non-positive and NaN weights are never chosen, and
 /// rounding at the top end falls to the last positive weight). `None` when no weight is positive.

@@ -494,3 +494,205 @@ fn ipsm_forgetting_the_density_ratio_is_caught() {
     assert!(verdict(false));
     assert!(!verdict(true));
 }
+
+// ---------------------------------------------------------------------------------------------
+// The moves as one Metropolis–Hastings kernel on the joint target (how a renderer runs them).
+
+/// Exact draws of the joint law `∝ c_k w_k(x) f(x) κ_k(u|x)` (weighted targets).
+fn joint_exact<'a>(
+    t: &'a Target<'a>,
+    f: &'a Cells,
+    ln_c: &'a [f64],
+) -> impl Fn(&mut ChainRng) -> State + 'a {
+    let n = t.atlas.levels();
+    let cmax = ln_c.iter().copied().fold(f64::NEG_INFINITY, f64::max).exp();
+    move |r: &mut ChainRng| {
+        let cw = |x: &P2| -> Vec<f64> {
+            weights(t, x)
+                .iter()
+                .zip(ln_c)
+                .map(|(w, l)| w * l.exp())
+                .collect()
+        };
+        let x = draw_point(f, &|x: &P2| cw(x).iter().sum::<f64>() / cmax, r);
+        let w = cw(&x);
+        let k = mcmc_core::rng::categorical(&w, uniform(r)).unwrap_or(n - 1);
+        in_chart(t, k, x, r)
+    }
+}
+
+fn joint_step<K: Kernel<State>>(
+    j: &mcmc_charts::Joint<'_, P2, Box<dyn Fn(&P2) -> f64 + Sync + '_>>,
+    k: &mut K,
+    s: &mut State,
+    rng: &mut ChainRng,
+) {
+    let l = mcmc_core::Target::evaluate(j, s);
+    let mut c = Chain::unchecked(std::mem::take(s), l);
+    k.step(&mut c, rng, &mut ());
+    *s = c.state;
+}
+
+proptest! {
+    #![proptest_config(config(8))]
+
+    /// In-chart steps, chart swaps as proposals, IPSM through any chart and target-space moves,
+    /// the last two with the Gibbs refresh of the chart, mixed into one kernel on the joint target
+    /// with random pseudo-priors: whole steps keep the joint law and are reversible.
+    #[test]
+    fn one_kernel_of_every_move_keeps_the_joint_law(
+        c1 in any_chart(), c2 in any_chart(), f in cells(), ln_c in prop::collection::vec(-0.7f64..0.7, 2), seed in any::<u64>()
+    ) {
+        use mcmc_charts::moves::{ChartSwap, PointMove, Refresh};
+        let atlas = Atlas::new(vec![c1.boxed(), c2.boxed()]);
+        let t = target(&atlas, &f, TargetKind::Weighted);
+        let joint = mcmc_charts::Joint::with_weights(&t, ln_c.clone()).unwrap();
+        let gibbs = Refresh::Gibbs { ln_weights: ln_c.clone() };
+        let mix: Mixture<'_, State> = Mixture::new(vec![
+            (0.3, Box::new(InChart::new(pssmlt_kernel())) as Box<dyn Proposal<State> + Send + Sync>),
+            (0.3, Box::new(ChartSwap::new(&t, LevelProposal::Independent(vec![0.3, 0.7])))),
+            (0.2, Box::new(InversePerturbation::through_any_chart(&t, pssmlt_kernel()).with_refresh(gibbs.clone()))),
+            (0.2, Box::new(PointMove::new(&t, GaussianRandomWalk::new(0.15).unwrap(), gibbs))),
+        ], MixtureRule::PerComponent).unwrap();
+        let mut mh = MetropolisHastings::new(&joint, mix);
+        let exact = joint_exact(&t, &f, &ln_c);
+        let mut rng = stream(seed, 0);
+        let inv = invariance(&exact, |s: &mut State, r: &mut ChainRng| joint_step(&joint, &mut mh, s, r),
+            features(&atlas), &inv_config(4000, 2, true), &mut rng).unwrap();
+        prop_assert!(inv.passed, "{inv}");
+        let pilot: Vec<Vec<f64>> = (0..2000).map(|_| exact(&mut rng).x.to_vec()).collect();
+        let grid = QuantileGrid::fit(&pilot, 4);
+        let ex = exchangeability(&exact, |s: &mut State, r: &mut ChainRng| joint_step(&joint, &mut mh, s, r),
+            |s: &State| grid.cell(&s.x).map(|c| c * 2 + s.chart), grid.cells() * 2,
+            &ExchangeabilityConfig { replicates: 15_000, alpha: ALPHA }, &mut rng).unwrap();
+        prop_assert!(ex.passed, "{ex}");
+    }
+
+    /// Chains that keep their charts (target-space moves and IPSM with the chart kept) and swap
+    /// points by [`mcmc_charts::moves::exchange`]: the product law is kept.
+    #[test]
+    fn exchanges_and_chart_keeping_moves_keep_the_product_law(c1 in any_chart(), c2 in any_chart(), f in cells(), seed in any::<u64>()) {
+        use mcmc_charts::moves::{Exchange, PointMove, Refresh, exchange};
+        let atlas = Atlas::new(vec![c1.boxed(), c2.boxed()]);
+        let t = target(&atlas, &f, TargetKind::Weighted);
+        let mut rng = stream(seed, 0);
+        let exact_k = |k: usize, r: &mut ChainRng| { let x = draw_point(&f, &|x: &P2| weights(&t, x)[k], r); in_chart(&t, k, x, r) };
+        let exact = |r: &mut ChainRng| vec![exact_k(0, r), exact_k(1, r)];
+        let mix: Mixture<'_, State> = Mixture::new(vec![
+            (0.5, Box::new(InChart::new(pssmlt_kernel())) as Box<dyn Proposal<State> + Send + Sync>),
+            (0.25, Box::new(InversePerturbation::through_any_chart(&t, pssmlt_kernel()))),
+            (0.25, Box::new(PointMove::new(&t, GaussianRandomWalk::new(0.15).unwrap(), Refresh::KeepChart))),
+        ], MixtureRule::PerComponent).unwrap();
+        let mut mh = [0, 1].map(|k| MetropolisHastings::new(Level { family: &t, level: k }, &mix));
+        let inv = invariance(&exact, |s: &mut Vec<State>, r: &mut ChainRng| {
+                for (k, st) in s.iter_mut().enumerate() { mh_step(&t, &mut mh[k], st, r); }
+                if let Exchange::Accepted(_, a, b) = exchange(&t, &s[0], &s[1], r) {
+                    s[0] = a;
+                    s[1] = b;
+                }
+            },
+            |s: &Vec<State>| s.iter().flat_map(|st| { let mut v = st.x.to_vec(); v.extend(st.u.iter().take(3)); v }).collect(),
+            &inv_config(3000, 2, false), &mut rng).unwrap();
+        prop_assert!(inv.passed, "{inv}");
+    }
+}
+
+/// A Gibbs refresh is exact whatever pseudo-priors it draws the chart with (its ratio accounts
+/// for the law it draws from). A target-space move that joins a chain in the charts with the
+/// point chain's ratio alone — the chart and coordinate draws left out of the acceptance — is
+/// caught.
+#[test]
+fn a_point_move_without_the_chart_terms_is_caught() {
+    use mcmc_charts::moves::{PointMove, Refresh};
+    struct PointRatioOnly<'a>(
+        PointMove<
+            'a,
+            P2,
+            Box<dyn Fn(&P2) -> f64 + Sync + 'a>,
+            Box<dyn mcmc_charts::Chart<P2>>,
+            GaussianRandomWalk,
+        >,
+    );
+    impl Proposal<State> for PointRatioOnly<'_> {
+        fn propose(&self, x: &State, y: &mut State, rng: &mut ChainRng) -> mcmc_core::Proposed {
+            let p = self.0.propose(x, y, rng);
+            // The random walk's own ratio (0), as a chain on points would use it.
+            mcmc_core::Proposed::with_ratio(if p.ln_ratio == f64::NEG_INFINITY {
+                p.ln_ratio
+            } else {
+                0.0
+            })
+        }
+    }
+    let (atlas, f) = broken_fixture();
+    let t = target(&atlas, &f, TargetKind::Weighted);
+    let ln_c = vec![0.0, 1.5];
+    let joint = mcmc_charts::Joint::with_weights(&t, ln_c.clone()).unwrap();
+    let run = |p: &dyn Proposal<State>| {
+        let mut mh = MetropolisHastings::new(&joint, p);
+        let exact = joint_exact(&t, &f, &ln_c);
+        invariance(
+            &exact,
+            |s: &mut State, r: &mut ChainRng| joint_step(&joint, &mut mh, s, r),
+            features(&atlas),
+            &inv_config(4000, 2, true),
+            &mut stream(12, 0),
+        )
+        .unwrap()
+    };
+    let walk = || GaussianRandomWalk::new(0.15).unwrap();
+    let gibbs = |w: Vec<f64>| Refresh::Gibbs { ln_weights: w };
+    let right = run(&PointMove::new(&t, walk(), gibbs(ln_c.clone())));
+    let other = run(&PointMove::new(&t, walk(), gibbs(vec![0.0, 0.0])));
+    let broken = run(&PointRatioOnly(PointMove::new(
+        &t,
+        walk(),
+        gibbs(ln_c.clone()),
+    )));
+    println!(
+        "refresh with the joint's weights: {right}\nwith other weights: {other}\npoint ratio only: {broken}"
+    );
+    assert!(right.passed, "{right}");
+    assert!(other.passed, "{other}");
+    assert!(!broken.passed, "{broken}");
+}
+
+/// A chart swap proposal whose level proposal is skewed but whose ratio leaves it out is caught.
+#[test]
+fn a_chart_swap_without_its_proposal_ratio_is_caught() {
+    use mcmc_charts::moves::ChartSwap;
+    struct NoRatio<'a>(
+        ChartSwap<'a, P2, Box<dyn Fn(&P2) -> f64 + Sync + 'a>, Box<dyn mcmc_charts::Chart<P2>>>,
+    );
+    impl Proposal<State> for NoRatio<'_> {
+        fn propose(&self, x: &State, y: &mut State, rng: &mut ChainRng) -> mcmc_core::Proposed {
+            let p = self.0.propose(x, y, rng);
+            let (i, j) = (x.chart as f64, y.chart as f64);
+            // Remove ln q(i) − ln q(j) for q = (0.1, 0.9): the ratio keeps only the densities.
+            let q = |k: f64| if k == 0.0 { 0.1f64 } else { 0.9 };
+            mcmc_core::Proposed::with_ratio(p.ln_ratio - (q(i).ln() - q(j).ln()))
+        }
+    }
+    let (atlas, f) = broken_fixture();
+    let t = target(&atlas, &f, TargetKind::Weighted);
+    let ln_c = vec![0.0, 0.0];
+    let joint = mcmc_charts::Joint::new(&t);
+    let swap = || ChartSwap::new(&t, LevelProposal::Independent(vec![0.1, 0.9]));
+    let run = |p: &dyn Proposal<State>| {
+        let mut mh = MetropolisHastings::new(&joint, p);
+        let exact = joint_exact(&t, &f, &ln_c);
+        invariance(
+            &exact,
+            |s: &mut State, r: &mut ChainRng| joint_step(&joint, &mut mh, s, r),
+            features(&atlas),
+            &inv_config(4000, 1, true),
+            &mut stream(13, 0),
+        )
+        .unwrap()
+    };
+    let good = run(&swap());
+    let bad = run(&NoRatio(swap()));
+    println!("with ratio: {good}\nwithout: {bad}");
+    assert!(good.passed, "{good}");
+    assert!(!bad.passed, "{bad}");
+}

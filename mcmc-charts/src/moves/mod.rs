@@ -14,7 +14,7 @@
 //! `min(1, π_i(u') K(u|u') / (π_i(u) K(u'|u)))`: plain Metropolis–Hastings on `U_i`.
 //!
 //! # Chart swap by serial tempering (`mcmc_core::tempering::SerialTempering` over
-//! [`crate::ChartedTarget`])
+//! [`crate::ChartedTarget`], or [`ChartSwap`] as a proposal on the [`crate::Joint`] target)
 //! State `(u, i)` with joint target `c_i π_i(u)`, which by the identity above is
 //! `c_i π̄_i(x) dμ(x) κ_i(du|x)`. The move keeps `x = T_i(u)`, proposes chart `j` with probability
 //! `q(j|i)`, and draws `u' ~ κ_j(·|x)`. In the `(x, chart, u)` parameterisation this is a move of the
@@ -26,7 +26,7 @@
 //! `min(1, c_j p_j(x) / (c_i p_i(x)))` — the paper's eq. 25, with no evaluation of `f`. For the
 //! importance-sampled targets every swap is accepted (all charts share the law `f`).
 //!
-//! # Chart swap by replica exchange (`mcmc_core::tempering::ReplicaExchange`)
+//! # Chart swap by replica exchange (`mcmc_core::tempering::ReplicaExchange`, or [`exchange`])
 //! Chains at `x1` (chart i) and `x2` (chart j) exchange points, each re-parameterised in the other's
 //! chart by its exact inverse. Applying the argument above to the product target gives
 //! `min(1, π̄_i(x2) π̄_j(x1) / (π̄_i(x1) π̄_j(x2)))`; with weighted targets
@@ -40,16 +40,32 @@
 //! hence of `x`. Points outside the image of `T_i` (`p_i(x) = 0`) are left where they are, which
 //! preserves `π̄` restricted to that set.
 //!
+//! # Moves of the point from any chart ([`PointMove`], [`InversePerturbation`] with [`Refresh`])
+//! A chain in the charts can take any move built for a chain on points: the point moves, then the
+//! chart and coordinates are redrawn from their conditional law given the new point (a Gibbs draw
+//! inside the proposal) or, for a chain that must keep its chart, only the coordinates. Writing
+//! the proposal as `T(y|x) · g(k', u'|y)` with `g` the exact conditional, the Metropolis–Hastings
+//! ratio on the joint target is `Π(y) T(x|y) / (Π(x) T(y|x))` with `Π = Σ_k c_k π̄_k` the point
+//! marginal: `g` cancels. [`Refresh`] has the details.
+//!
 //! # Charts without an exact inverse
 //! If `R_i` samples `ρ_i = λ_i κ_i` instead of `κ_i`, the Gibbs draws above become proposals and the
 //! ratios gain `λ_i(u) / λ_j(u')` (swaps: the reverse move draws `u` with `λ_i`, the forward move
 //! drew `u'` with `λ_j`) and `λ_i(u') / λ_i(u)` (IPSM). [`crate::Chart::ln_inverse_bias`] reports
 //! `ln λ`; both moves include it.
 
+mod exchange;
 mod in_chart;
 mod ipsm;
+mod point_move;
+mod refresh;
+mod swap;
 mod target_space;
 
+pub use exchange::{Exchange, exchange, exchange_ln_ratio};
 pub use in_chart::InChart;
 pub use ipsm::InversePerturbation;
+pub use point_move::PointMove;
+pub use refresh::Refresh;
+pub use swap::ChartSwap;
 pub use target_space::TargetSpace;

@@ -9,10 +9,18 @@
 //!   cannot reverse its own move — a user-path proposal that could never regenerate the current
 //!   path, or a pair of directional moves that are only symmetric together — because the other
 //!   components may generate the reverse move. Every component must then evaluate
-//!   [`Proposal::ln_transition_density`].
+//!   [`Proposal::ln_transition_density`] (or [`Proposal::ln_pair_densities`] when candidates carry
+//!   a record of how they were made).
+//!
+//! Selection probabilities are fixed ([`Selection::Fixed`]) or weighted by each component's
+//! [`Proposal::suitability`] for the current state ([`Selection::Suitability`]):
+//! `P_k(x) = w_k s_k(x) / Σ_j w_j s_j(x)`, so moves that cannot apply to `x` are never chosen.
+//! The probabilities then depend on the state and enter the ratio exactly: per component
+//! `P_k(y) q_k(x|y) / (P_k(x) q_k(y|x))` (Metropolis–Hastings on the space extended by the
+//! component index), combined `Σ_k P_k(y) q_k(x|y) / Σ_k P_k(x) q_k(y|x)`.
 
 use crate::error::check_positive;
-use crate::{ChainRng, McmcError, Outcome, Proposal, Proposed, rng::uniform};
+use crate::{ChainRng, Failure, McmcError, Outcome, Proposal, Proposed, rng::uniform};
 
 /// Which transition-density rule a [`Mixture`] reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,15 +31,27 @@ pub enum MixtureRule {
     Combined,
 }
 
+/// How a [`Mixture`] chooses its component.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Selection {
+    /// With the fixed normalised weights `w_k`, whatever the state.
+    #[default]
+    Fixed,
+    /// With probability `w_k s_k(x) / Σ_j w_j s_j(x)`, `s_k` the component's
+    /// [`Proposal::suitability`] (exact: the probabilities enter the ratio).
+    Suitability,
+}
+
 type Component<'a, S> = Box<dyn Proposal<S> + Send + Sync + 'a>;
 
-/// A state-independent mixture of proposals.
+/// A mixture of proposals.
 pub struct Mixture<'a, S> {
     components: Vec<Component<'a, S>>,
     ln_weights: Vec<f64>,
     cumulative: Vec<f64>,
     kind_offsets: Vec<usize>,
     rule: MixtureRule,
+    selection: Selection,
 }
 
 impl<S> std::fmt::Debug for Mixture<'_, S> {
@@ -40,6 +60,7 @@ impl<S> std::fmt::Debug for Mixture<'_, S> {
             .field("kinds", &self.kinds_inner())
             .field("weights", &self.weights())
             .field("rule", &self.rule)
+            .field("selection", &self.selection)
             .finish()
     }
 }
@@ -92,7 +113,19 @@ impl<'a, S> Mixture<'a, S> {
             cumulative,
             kind_offsets,
             rule,
+            selection: Selection::Fixed,
         })
+    }
+
+    /// Choose components as `selection` says (default [`Selection::Fixed`]).
+    pub fn with_selection(mut self, selection: Selection) -> Self {
+        self.selection = selection;
+        self
+    }
+
+    /// The selection rule.
+    pub fn selection(&self) -> Selection {
+        self.selection
     }
 
     /// Check, on a pair of states, that every component evaluates its transition density, as the
@@ -122,22 +155,81 @@ impl<'a, S> Mixture<'a, S> {
         self.components.iter().flat_map(|c| c.kinds()).collect()
     }
 
-    fn choose(&self, rng: &mut ChainRng) -> usize {
-        let u = uniform(rng);
-        self.cumulative
-            .iter()
-            .position(|&c| u < c)
-            .unwrap_or(self.components.len() - 1)
+    /// `ln P_k(x)` for every component (all `-inf` when no component suits `x`).
+    pub fn ln_selection(&self, x: &S) -> Vec<f64> {
+        match self.selection {
+            Selection::Fixed => self.ln_weights.clone(),
+            Selection::Suitability => {
+                let w: Vec<f64> = self
+                    .components
+                    .iter()
+                    .zip(&self.ln_weights)
+                    .map(|(c, lw)| lw.exp() * suitability(c.as_ref(), x))
+                    .collect();
+                let total: f64 = w.iter().sum();
+                w.iter()
+                    .map(|&v| {
+                        if total > 0.0 {
+                            (v / total).ln()
+                        } else {
+                            f64::NEG_INFINITY
+                        }
+                    })
+                    .collect()
+            }
+        }
     }
 
-    /// `ln Σ_k P_k q_k(to|from)`, or `None` when a component cannot evaluate it.
+    fn choose(&self, x: &S, rng: &mut ChainRng) -> Option<usize> {
+        let u = uniform(rng);
+        match self.selection {
+            Selection::Fixed => Some(
+                self.cumulative
+                    .iter()
+                    .position(|&c| u < c)
+                    .unwrap_or(self.components.len() - 1),
+            ),
+            Selection::Suitability => {
+                let w: Vec<f64> = self.ln_selection(x).iter().map(|l| l.exp()).collect();
+                crate::rng::categorical(&w, u)
+            }
+        }
+    }
+
+    /// `ln Σ_k P_k(from) q_k(to|from)`, or `None` when a component cannot evaluate it.
     pub fn ln_mixture_density(&self, from: &S, to: &S) -> Option<f64> {
+        let ln_p = self.ln_selection(from);
         let mut terms = Vec::with_capacity(self.components.len());
-        for (c, lw) in self.components.iter().zip(&self.ln_weights) {
+        for (c, lw) in self.components.iter().zip(&ln_p) {
             terms.push(lw + c.ln_transition_density(from, to)?);
         }
         Some(log_sum_exp(&terms))
     }
+
+    /// `(ln Σ_k P_k(x) q_k(y|x), ln Σ_k P_k(y) q_k(x|y))` for a candidate `y` proposed from `x`
+    /// (through [`Proposal::ln_pair_densities`], so records carried by `y` are honoured).
+    pub fn ln_mixture_pair(&self, x: &S, y: &S) -> Option<(f64, f64)> {
+        let (px, py) = (self.ln_selection(x), self.ln_selection(y));
+        let mut fwd = Vec::with_capacity(self.components.len());
+        let mut rev = Vec::with_capacity(self.components.len());
+        for (k, c) in self.components.iter().enumerate() {
+            // A component that is never chosen in a direction contributes nothing there, and
+            // need not be evaluated (it may not even apply to the state).
+            if px[k] == f64::NEG_INFINITY && py[k] == f64::NEG_INFINITY {
+                continue;
+            }
+            let (f, r) = c.ln_pair_densities(x, y)?;
+            fwd.push(px[k] + f);
+            rev.push(py[k] + r);
+        }
+        Some((log_sum_exp(&fwd), log_sum_exp(&rev)))
+    }
+}
+
+/// A component's suitability, with negative and NaN values treated as 0.
+fn suitability<S>(c: &(dyn Proposal<S> + Send + Sync + '_), x: &S) -> f64 {
+    let s = c.suitability(x);
+    if s > 0.0 && s.is_finite() { s } else { 0.0 }
 }
 
 /// `ln Σ exp(t_i)`, exact for `-inf` terms.
@@ -155,25 +247,51 @@ pub fn log_sum_exp(terms: &[f64]) -> f64 {
 impl<S> Mixture<'_, S> {
     /// What the mixture reports for a candidate `y` drawn from `x` by component `k`.
     fn report(&self, k: usize, x: &S, y: &S, p: Proposed) -> Proposed {
+        let kind = self.kind_offsets[k] + p.kind;
+        if p.failure.is_some() {
+            return Proposed { kind, ..p };
+        }
         let ln_ratio = match self.rule {
-            MixtureRule::PerComponent => p.ln_ratio,
-            MixtureRule::Combined => {
-                match (self.ln_mixture_density(y, x), self.ln_mixture_density(x, y)) {
-                    (Some(rev), Some(fwd)) => rev - fwd,
-                    _ => f64::NAN, // counted and rejected by the kernel; see `check_combined`
+            MixtureRule::PerComponent => match self.selection {
+                Selection::Fixed => p.ln_ratio,
+                Selection::Suitability => {
+                    let (sx, sy) = (
+                        suitability(self.components[k].as_ref(), x),
+                        suitability(self.components[k].as_ref(), y),
+                    );
+                    let (tx, ty) = (self.total_suitability(x), self.total_suitability(y));
+                    // ln P_k(y) − ln P_k(x); the base weight cancels.
+                    p.ln_ratio + sy.ln() - ty.ln() - sx.ln() + tx.ln()
                 }
-            }
+            },
+            MixtureRule::Combined => match self.ln_mixture_pair(x, y) {
+                Some((fwd, rev)) => rev - fwd,
+                None => f64::NAN, // counted and rejected by the kernel; see `check_combined`
+            },
         };
-        Proposed {
-            ln_ratio,
-            kind: self.kind_offsets[k] + p.kind,
+        Proposed::new(ln_ratio, kind)
+    }
+
+    /// `Σ_k w_k s_k(x)` (1 under fixed selection).
+    fn total_suitability(&self, x: &S) -> f64 {
+        match self.selection {
+            Selection::Fixed => 1.0,
+            Selection::Suitability => self
+                .components
+                .iter()
+                .zip(&self.ln_weights)
+                .map(|(c, lw)| lw.exp() * suitability(c.as_ref(), x))
+                .sum(),
         }
     }
 }
 
 impl<S> Proposal<S> for Mixture<'_, S> {
     fn propose(&self, x: &S, y: &mut S, rng: &mut ChainRng) -> Proposed {
-        let k = self.choose(rng);
+        let Some(k) = self.choose(x, rng) else {
+            // No component suits x (possible only with suitability selection).
+            return Proposed::failed(0, Failure::NotApplicable);
+        };
         let p = self.components[k].propose(x, y, rng);
         self.report(k, x, y, p)
     }
@@ -185,14 +303,17 @@ impl<S> Proposal<S> for Mixture<'_, S> {
                 let k = self.kind_offsets.partition_point(|&o| o <= kind) - 1;
                 let own =
                     self.components[k].ln_move_density(from, to, kind - self.kind_offsets[k])?;
-                Some(self.ln_weights[k] + own)
+                Some(self.ln_selection(from)[k] + own)
             }
         }
     }
 
     fn outcomes(&self, x: &S) -> Option<Vec<Outcome<S>>> {
         let mut out = Vec::new();
-        for (k, (c, lw)) in self.components.iter().zip(&self.ln_weights).enumerate() {
+        for (k, (c, lw)) in self.components.iter().zip(self.ln_selection(x)).enumerate() {
+            if lw == f64::NEG_INFINITY {
+                continue;
+            }
             for o in c.outcomes(x)? {
                 let proposed = self.report(k, x, &o.state, o.proposed);
                 out.push(Outcome {
@@ -207,6 +328,17 @@ impl<S> Proposal<S> for Mixture<'_, S> {
 
     fn ln_transition_density(&self, from: &S, to: &S) -> Option<f64> {
         self.ln_mixture_density(from, to)
+    }
+
+    fn ln_pair_densities(&self, x: &S, y: &S) -> Option<(f64, f64)> {
+        self.ln_mixture_pair(x, y)
+    }
+
+    /// Fixed selection: 1 (some component is always tried). Suitability selection: `Σ_k w_k s_k(x)`
+    /// with normalised base weights, so a mixture nested in another suitability-weighted mixture
+    /// is chosen as its components would be in the flattened mixture.
+    fn suitability(&self, x: &S) -> f64 {
+        self.total_suitability(x)
     }
 
     fn kinds(&self) -> Vec<String> {

@@ -6,6 +6,6 @@ mod random_walk;
 mod unit_cube;
 
 pub use independence::{Independence, UniformCube};
-pub use mixture::{Mixture, MixtureRule, log_sum_exp};
+pub use mixture::{Mixture, MixtureRule, Selection, log_sum_exp};
 pub use random_walk::GaussianRandomWalk;
 pub use unit_cube::{CubeWalk, SmallStep, wrap};

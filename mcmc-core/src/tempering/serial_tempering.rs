@@ -24,6 +24,30 @@ pub enum LevelProposal {
     Independent(Vec<f64>),
 }
 
+impl LevelProposal {
+    /// Draw the next level from `current` on a ladder of `levels`: the level (`None` for a move
+    /// off the ladder, which is rejected) and the proposal's log ratio `ln q(current|j) −
+    /// ln q(j|current)`. Shared by [`SerialTempering`] and by any kernel that moves a state
+    /// between levels as a proposal (the chart swaps of `mcmc-charts`).
+    pub fn draw(&self, current: usize, levels: usize, rng: &mut ChainRng) -> (Option<usize>, f64) {
+        match self {
+            LevelProposal::Neighbour => {
+                let up = uniform(rng) < 0.5;
+                let j = if up {
+                    Some(current + 1).filter(|&j| j < levels)
+                } else {
+                    current.checked_sub(1)
+                };
+                (j, 0.0)
+            }
+            LevelProposal::Independent(w) => {
+                let j = crate::rng::categorical(w, uniform(rng)).unwrap_or(levels - 1);
+                (Some(j), (w[current] / w[j]).ln())
+            }
+        }
+    }
+}
+
 /// Warm-up adaptation of the pseudo-prior weights.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Adaptation {
@@ -148,31 +172,7 @@ impl<S: Clone, F: Family<S>, K: Kernel<S>> SerialTempering<S, F, K> {
     }
 
     fn propose_level(&self, rng: &mut ChainRng) -> (Option<usize>, f64) {
-        let n = self.levels();
-        match &self.level_proposal {
-            LevelProposal::Neighbour => {
-                let up = uniform(rng) < 0.5;
-                let j = if up {
-                    Some(self.level + 1).filter(|&j| j < n)
-                } else {
-                    self.level.checked_sub(1)
-                };
-                (j, 0.0)
-            }
-            LevelProposal::Independent(w) => {
-                let total: f64 = w.iter().sum();
-                let mut u = uniform(rng) * total;
-                let mut j = n - 1;
-                for (i, &p) in w.iter().enumerate() {
-                    if u < p {
-                        j = i;
-                        break;
-                    }
-                    u -= p;
-                }
-                (Some(j), (w[self.level] / w[j]).ln())
-            }
-        }
+        self.level_proposal.draw(self.level, self.levels(), rng)
     }
 
     /// Propose a level change; returns whether the chain moved to another level.
