@@ -119,13 +119,21 @@ fn integrator_benches(c: &mut Criterion) {
         let s = Scene::new(&builtin::builtin(name).unwrap(), Some((64, 64))).unwrap();
         g.throughput(Throughput::Elements(64 * 64));
         g.bench_function(BenchmarkId::new("pt_pass", name), |b| {
-            b.iter(|| black_box(render(&s, &pt, Budget::SamplesPerPixel(1), 1, |_, _| true)))
+            b.iter(|| {
+                black_box(render(&s, &pt, Budget::SamplesPerPixel(1.0), 1, |_, _| {
+                    true
+                }))
+            })
         });
         g.bench_function(BenchmarkId::new("bdpt_pass", name), |b| {
             b.iter(|| {
-                black_box(render(&s, &bdpt, Budget::SamplesPerPixel(1), 1, |_, _| {
-                    true
-                }))
+                black_box(render(
+                    &s,
+                    &bdpt,
+                    Budget::SamplesPerPixel(1.0),
+                    1,
+                    |_, _| true,
+                ))
             })
         });
     }
@@ -149,9 +157,13 @@ fn scaling_benches(c: &mut Criterion) {
         g.bench_function(BenchmarkId::new("bdpt_pass_cornell", threads), |b| {
             b.iter(|| {
                 pool.install(|| {
-                    black_box(render(&s, &bdpt, Budget::SamplesPerPixel(1), 1, |_, _| {
-                        true
-                    }))
+                    black_box(render(
+                        &s,
+                        &bdpt,
+                        Budget::SamplesPerPixel(1.0),
+                        1,
+                        |_, _| true,
+                    ))
                 })
             })
         });

@@ -7,8 +7,12 @@ use clap::Parser;
 
 fn main() {
     let args = cli::Cli::parse();
-    if let Err(e) = cli::run(args) {
-        eprintln!("error: {e}");
-        std::process::exit(1);
+    match cli::run(args) {
+        Ok(()) => {}
+        Err(cli::CliError::Interrupted) => std::process::exit(cli::interrupt::EXIT_INTERRUPTED),
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(1);
+        }
     }
 }

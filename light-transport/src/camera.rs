@@ -165,6 +165,24 @@ impl Camera {
         }
     }
 
+    /// Film `[0,1)²` position of a sample in `pixel` (row-major index), `jitter` in `[0,1)²` inside
+    /// the pixel.
+    #[inline]
+    pub fn film_position(&self, pixel: usize, jitter: [f64; 2]) -> [f64; 2] {
+        let (w, h) = (self.width, self.height);
+        let (x, y) = (pixel % w, pixel / w);
+        [
+            crate::math::clamp_unit((x as f64 + jitter[0]) / w as f64),
+            crate::math::clamp_unit((y as f64 + jitter[1]) / h as f64),
+        ]
+    }
+
+    /// The raster position (pixels from the left and top edges) of film position `film`.
+    #[inline]
+    pub fn raster_of_film(&self, film: [f64; 2]) -> [f64; 2] {
+        [film[0] * self.width as f64, film[1] * self.height as f64]
+    }
+
     /// Density of the lens point (area measure): `1 / A_lens` (1 for a pinhole).
     pub fn pdf_lens(&self) -> f64 {
         1.0 / self.lens_area()

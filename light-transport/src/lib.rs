@@ -5,6 +5,7 @@
 
 pub mod accel;
 pub mod bsdf;
+pub mod budget;
 pub mod camera;
 pub mod cmlt;
 pub mod error;
@@ -16,9 +17,11 @@ pub mod math;
 pub mod metropolis;
 pub mod path;
 pub mod pathspace;
+pub mod renderer;
 pub mod sampler;
 pub mod scene;
 pub mod spectrum;
 
+pub use budget::Budget;
 pub use error::{Error, Result};
 pub use spectrum::Rgb;

@@ -38,7 +38,7 @@ fn batches<E: Estimator>(scene: &Scene, est: &E, spp: u64, seed: u64) -> Vec<Ima
             let (film, stats) = render(
                 scene,
                 est,
-                Budget::SamplesPerPixel(spp),
+                Budget::SamplesPerPixel(spp as f64),
                 seed * 1000 + b,
                 |_, _| true,
             );

@@ -31,9 +31,12 @@ use light_transport::film::Image;
 use light_transport::metropolis::{ImportanceKind, Method, MetropolisSettings};
 use light_transport::scene::{Scene, builtin};
 use mcmc_charts::Chart;
+use mcmc_charts::Joint;
 use mcmc_core::kernel::{FnObserver, Observer};
+use mcmc_core::proposals::{Mixture, MixtureRule};
 use mcmc_core::rng::uniform;
-use mcmc_core::{Chain, ChainRng, Failure, Stats};
+use mcmc_core::{Chain, ChainRng, Stats};
+use mcmc_core::{Kernel, MetropolisHastings, Proposal, Proposed};
 use rayon::prelude::*;
 
 fn scene(name: &str) -> Scene {
@@ -117,13 +120,31 @@ fn cmlt_with_ipsm_and_path_space_mutations_converges_to_bdpt() {
 
 struct SwapWithoutProposalRatio(Cmlt);
 
+/// The swap of CMLT with its proposal ratio `ln q(i) − ln q(j)` taken back out.
+struct NoProposalRatio<'a> {
+    swap: Box<dyn Proposal<CmltState> + Send + Sync + 'a>,
+    q: Vec<f64>,
+}
+
+impl Proposal<CmltState> for NoProposalRatio<'_> {
+    fn propose(&self, x: &CmltState, y: &mut CmltState, rng: &mut ChainRng) -> Proposed {
+        let p = self.swap.propose(x, y, rng);
+        // Missing: + ln q(i) − ln q(j).
+        let (i, j) = (x.chart, y.chart);
+        Proposed::new(p.ln_ratio - (self.q[i].ln() - self.q[j].ln()), p.kind)
+    }
+}
+
 impl Method for SwapWithoutProposalRatio {
     type State = CmltState;
     fn groups(&self) -> usize {
         self.0.groups()
     }
-    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> CmltState {
+    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (CmltState, f64) {
         self.0.independent(scene, g, seed)
+    }
+    fn ln_density(&self, scene: &Scene, s: &CmltState) -> f64 {
+        self.0.ln_density(scene, s)
     }
     fn mutate<O: Observer<CmltState>>(
         &self,
@@ -133,39 +154,26 @@ impl Method for SwapWithoutProposalRatio {
         rng: &mut ChainRng,
         observer: &mut O,
     ) {
-        // Let the real integrator undo the bootstrap scaling and set the density.
-        self.0.mutate(scene, chain, 0, rng, observer);
+        // Half in-chart steps, half swaps, as the integrator's moves but with the broken swap.
+        let k = chain.state.x.path.edges();
+        let atlas = self.0.atlas(scene, k);
+        let target = Cmlt::target(&atlas);
+        let joint = Joint::new(&target);
+        let mut moves = self.0.moves(scene, &target, k).unwrap().into_iter();
+        let in_chart = moves.next().unwrap().1;
+        let swap = moves.next().unwrap().1;
+        let broken = NoProposalRatio {
+            swap,
+            q: self.0.swap_proposal[k - 1].clone(),
+        };
+        let mix = Mixture::new(
+            vec![(0.5, in_chart), (0.5, Box::new(broken) as _)],
+            MixtureRule::PerComponent,
+        )
+        .unwrap();
+        let mut mh = MetropolisHastings::new(&joint, mix);
         for _ in 0..n {
-            if uniform(rng) >= 0.5 {
-                self.0.in_chart(scene, chain, rng, observer);
-                continue;
-            }
-            let (k, i) = (chain.state.k, chain.state.chart);
-            let q = &self.0.swap_proposal[k - 1];
-            let mut v = uniform(rng);
-            let j = q
-                .iter()
-                .position(|p| {
-                    let hit = v < *p;
-                    v -= p;
-                    hit
-                })
-                .unwrap_or(k);
-            let (pi, pj) = (
-                chain.state.x.strategy_importance(i),
-                chain.state.x.strategy_importance(j),
-            );
-            let chart = TechniqueChart::new(scene, k, j, ImportanceKind::Luminance).unwrap();
-            chain.candidate.clone_from(&chain.state);
-            chain.candidate.u.resize(chart.dim(), 0.0);
-            if !(pj > 0.0) || !chart.invert(&chain.state.x, &mut chain.candidate.u, rng) {
-                chain.fail(2, Failure::NotApplicable, observer);
-                continue;
-            }
-            chain.candidate.chart = j;
-            let ln = chain.ln_density;
-            // Missing: + ln q(i) − ln q(j).
-            chain.decide(ln, pi.ln() - pj.ln(), 2, rng, observer);
+            mh.step(chain, rng, observer);
         }
     }
     fn kinds(&self) -> Vec<String> {
@@ -247,8 +255,11 @@ impl Method for ExchangeWithoutRatio {
     fn groups(&self) -> usize {
         self.0.groups()
     }
-    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> CmltState {
+    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (CmltState, f64) {
         self.0.independent(scene, g, seed)
+    }
+    fn ln_density(&self, scene: &Scene, s: &CmltState) -> f64 {
+        self.0.ln_density(scene, s)
     }
     fn mutate<O: Observer<CmltState>>(
         &self,
@@ -263,27 +274,32 @@ impl Method for ExchangeWithoutRatio {
     fn exchange_every(&self) -> Option<u64> {
         self.0.exchange_every()
     }
-    fn exchange(&self, scene: &Scene, chains: &mut [Chain<CmltState>], rng: &mut ChainRng) {
-        for (a, b) in Cmlt::exchange_pairs(chains, rng) {
+    fn exchange(
+        &self,
+        scene: &Scene,
+        chains: &mut [Chain<CmltState>],
+        groups: &[usize],
+        rng: &mut ChainRng,
+    ) {
+        for (a, b) in Cmlt::exchange_pairs(chains, groups, rng) {
             let (x, y) = (&chains[a].state, &chains[b].state);
-            let (k, i, j) = (x.k, x.chart, y.chart);
+            let (k, i, j) = (x.x.path.edges(), x.chart, y.chart);
             if !(x.x.strategy_importance(j) > 0.0 && y.x.strategy_importance(i) > 0.0) {
                 continue;
             }
-            let ci = TechniqueChart::new(scene, k, i, ImportanceKind::Luminance).unwrap();
-            let cj = TechniqueChart::new(scene, k, j, ImportanceKind::Luminance).unwrap();
-            let (mut ua, mut ub) = (vec![0.0; ci.dim()], vec![0.0; cj.dim()]);
-            assert!(ci.reparameterise(&y.x, &cj, &y.u, &mut ua, rng));
-            assert!(cj.reparameterise(&x.x, &ci, &x.u, &mut ub, rng));
+            let atlas = self.0.atlas(scene, k);
+            let (mut ua, mut ub) = (Vec::new(), Vec::new());
+            assert!(atlas.inverse_from(i, &y.x, j, &y.u, &mut ua, rng));
+            assert!(atlas.inverse_from(j, &x.x, i, &x.u, &mut ub, rng));
             // Missing: accept with min(1, p_i(x̄₂) p_j(x̄₁) / (p_i(x̄₁) p_j(x̄₂))).
-            let (xa, xb) = (chains[a].state.x.clone(), chains[b].state.x.clone());
-            let (la, lb) = (chains[a].ln_density, chains[b].ln_density);
-            chains[a].state.x = xb;
-            chains[a].state.u = ua;
-            chains[a].ln_density = lb;
-            chains[b].state.x = xa;
-            chains[b].state.u = ub;
-            chains[b].ln_density = la;
+            let (lo, hi) = chains.split_at_mut(a.max(b));
+            let (ca, cb) = if a < b {
+                (&mut lo[a], &mut hi[0])
+            } else {
+                (&mut hi[0], &mut lo[b])
+            };
+            mcmc_charts::moves::Exchange::Accepted(1.0, ua, ub).apply(&mut ca.state, &mut cb.state);
+            std::mem::swap(&mut ca.ln_density, &mut cb.ln_density);
         }
     }
     fn kinds(&self) -> Vec<String> {
@@ -300,8 +316,11 @@ impl<M: Method<State = CmltState>> Method for OnlyChart<M> {
     fn groups(&self) -> usize {
         self.0.groups()
     }
-    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> CmltState {
+    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (CmltState, f64) {
         self.0.independent(scene, g, seed)
+    }
+    fn ln_density(&self, scene: &Scene, s: &CmltState) -> f64 {
+        self.0.ln_density(scene, s)
     }
     fn mutate<O: Observer<CmltState>>(
         &self,
@@ -322,8 +341,14 @@ impl<M: Method<State = CmltState>> Method for OnlyChart<M> {
     fn exchange_every(&self) -> Option<u64> {
         self.0.exchange_every()
     }
-    fn exchange(&self, scene: &Scene, chains: &mut [Chain<CmltState>], rng: &mut ChainRng) {
-        self.0.exchange(scene, chains, rng);
+    fn exchange(
+        &self,
+        scene: &Scene,
+        chains: &mut [Chain<CmltState>],
+        groups: &[usize],
+        rng: &mut ChainRng,
+    ) {
+        self.0.exchange(scene, chains, groups, rng);
     }
     fn kinds(&self) -> Vec<String> {
         self.0.kinds()
@@ -443,14 +468,15 @@ fn exchange_pairs_cross_charts_within_a_length_and_ignore_the_paths() {
     let m = cmlt_with(&scene, SwapKind::ReplicaExchange, 0.0, 0.0);
     // Chains of a few lengths and charts, with their bootstrap paths.
     let mut chains: Vec<Chain<CmltState>> = (0..200u64)
-        .map(|c| Chain::unchecked(m.independent(&scene, (c % 3) as usize, c), 0.0))
+        .map(|c| Chain::unchecked(m.independent(&scene, (c % 3) as usize, c).0, 0.0))
         .collect();
-    let pairs = Cmlt::exchange_pairs(&chains, &mut mcmc_core::rng::stream(5, 0));
+    let groups: Vec<usize> = (0..chains.len()).map(|c| c % 3).collect();
+    let pairs = Cmlt::exchange_pairs(&chains, &groups, &mut mcmc_core::rng::stream(5, 0));
     assert!(pairs.len() > 40, "only {} pairs", pairs.len());
     let mut seen = vec![false; chains.len()];
     for &(a, b) in &pairs {
         let (x, y) = (&chains[a].state, &chains[b].state);
-        assert_eq!(x.k, y.k);
+        assert_eq!(groups[a], groups[b]);
         assert_ne!(x.chart, y.chart);
         assert!(!seen[a] && !seen[b], "a chain is in two pairs");
         seen[a] = true;
@@ -463,7 +489,7 @@ fn exchange_pairs_cross_charts_within_a_length_and_ignore_the_paths() {
     }
     assert_eq!(
         pairs,
-        Cmlt::exchange_pairs(&chains, &mut mcmc_core::rng::stream(5, 0))
+        Cmlt::exchange_pairs(&chains, &groups, &mut mcmc_core::rng::stream(5, 0))
     );
 }
 

@@ -14,11 +14,12 @@
 mod common;
 
 use common::{ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, metropolis_runs, min_p, settings};
+use light_transport::Budget;
 use light_transport::film::Image;
 use light_transport::integrators::Bdpt;
 use light_transport::metropolis::{
-    self, Budget, Contribution, ImportanceKind, Method, MetropolisSettings, Mmlt, PrimaryState,
-    Pssmlt, Recordable, Seeding, mutate_primary,
+    self, Contribution, ImportanceKind, Method, MetropolisSettings, Mmlt, PrimaryState, Pssmlt,
+    Seeding, mutate_primary,
 };
 use light_transport::path::{MisHeuristic, WalkSettings};
 use light_transport::scene::{Scene, builtin};
@@ -60,14 +61,18 @@ impl Method for Toy {
     fn groups(&self) -> usize {
         1
     }
-    fn independent(&self, _scene: &Scene, _g: usize, seed: u64) -> PrimaryState {
+    fn independent(&self, _scene: &Scene, _g: usize, seed: u64) -> (PrimaryState, f64) {
         let mut s = PrimaryState {
             sample: PrimarySample::new(1, Default::default(), seed).unwrap(),
             contribution: Contribution::default(),
             length: 0,
         };
         Toy::evaluate(&mut s);
-        s
+        let w = s.contribution.importance;
+        (s, w)
+    }
+    fn ln_density(&self, _scene: &Scene, s: &PrimaryState) -> f64 {
+        s.contribution.importance.ln()
     }
     fn mutate<O: Observer<PrimaryState>>(
         &self,
@@ -100,7 +105,7 @@ fn toy_runs(seeding: Seeding) -> Vec<Vec<f64>> {
             let settings = MetropolisSettings {
                 chains: 16,
                 bootstrap: 256,
-                budget: Budget::MutationsPerPixel(1.0),
+                budget: Budget::SamplesPerPixel(1.0),
                 seed: 1000 + r,
                 seeding,
             };
@@ -135,10 +140,15 @@ impl Method for NotReplayable {
     fn groups(&self) -> usize {
         1
     }
-    fn independent(&self, s: &Scene, g: usize, seed: u64) -> PrimaryState {
-        let mut st = Toy.independent(s, g, seed);
-        st.contribution.importance *= 1.0 + self.0.fetch_add(1, Ordering::Relaxed) as f64 * 1e-6;
-        st
+    fn independent(&self, s: &Scene, g: usize, seed: u64) -> (PrimaryState, f64) {
+        let (st, w) = Toy.independent(s, g, seed);
+        (
+            st,
+            w * (1.0 + self.0.fetch_add(1, Ordering::Relaxed) as f64 * 1e-6),
+        )
+    }
+    fn ln_density(&self, s: &Scene, st: &PrimaryState) -> f64 {
+        Toy.ln_density(s, st)
     }
     fn mutate<O: Observer<PrimaryState>>(
         &self,
@@ -240,15 +250,19 @@ impl Method for MismatchedImportance {
     fn groups(&self) -> usize {
         1
     }
-    fn independent(&self, s: &Scene, g: usize, seed: u64) -> PrimaryState {
-        let mut st = self.0.independent(s, g, seed);
-        st.contribution.importance = st
+    fn independent(&self, s: &Scene, g: usize, seed: u64) -> (PrimaryState, f64) {
+        let (st, _) = self.0.independent(s, g, seed);
+        // The bootstrap weighs by the max component; the state (chains, recording) is luminance.
+        let w = st
             .contribution
             .splats
             .iter()
             .map(|v| v.1.max_component())
             .sum();
-        st
+        (st, w)
+    }
+    fn ln_density(&self, s: &Scene, st: &PrimaryState) -> f64 {
+        self.0.ln_density(s, st)
     }
     fn mutate<O: Observer<PrimaryState>>(
         &self,
@@ -258,9 +272,6 @@ impl Method for MismatchedImportance {
         r: &mut ChainRng,
         o: &mut O,
     ) {
-        // The seed's importance was max-component: re-evaluate with luminance before mutating.
-        self.0.evaluate(s, &mut c.state);
-        c.ln_density = c.state.contribution().importance.ln();
         self.0.mutate(s, c, n, r, o)
     }
     fn kinds(&self) -> Vec<String> {

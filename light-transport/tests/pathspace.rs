@@ -20,19 +20,21 @@ use common::{
     ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, blocks_and_stats, metropolis_runs, min_p,
     settings,
 };
+use light_transport::Budget;
 use light_transport::film::Image;
-use light_transport::integrators::{Budget as PassBudget, Estimator, Splat, render};
+use light_transport::integrators::{Estimator, Splat, render};
 use light_transport::metropolis::{
-    self, Budget, ImportanceKind, Method, MetropolisSettings, Seeding, SplatRecorder,
+    self, ExpectedValue, ImportanceKind, Method, MetropolisSettings, Seeding,
 };
 use light_transport::pathspace::erpt::seed_paths;
 use light_transport::pathspace::{
-    Erpt, ErptSettings, MutationKind, MutationProbabilities, Mutations, NewPath, PathMlt, PathState,
+    Erpt, ErptSettings, MutationProbabilities, Mutations, NewPath, PathMlt, PathState,
 };
 use light_transport::sampler::IndependentStream;
 use light_transport::scene::{Scene, builtin};
 use light_transport::spectrum::Rgb;
 use mcmc_core::kernel::Observer;
+use mcmc_core::proposals::{MixtureRule, Selection};
 use mcmc_core::rng::uniform;
 use mcmc_core::{Chain, ChainRng};
 
@@ -40,12 +42,46 @@ fn scene(name: &str) -> Scene {
     Scene::new(&builtin::builtin(name).unwrap(), Some((W, H))).unwrap()
 }
 
+/// The mutations of the registry, in its order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum MutationKind {
+    Bidirectional,
+    LensSubpath,
+    Lens,
+    Caustic,
+    MultiChain,
+    NewPath,
+}
+
+impl MutationKind {
+    const ALL: [MutationKind; 6] = [
+        MutationKind::Bidirectional,
+        MutationKind::LensSubpath,
+        MutationKind::Lens,
+        MutationKind::Caustic,
+        MutationKind::MultiChain,
+        MutationKind::NewPath,
+    ];
+
+    fn name(&self) -> &'static str {
+        light_transport::pathspace::REGISTRY[*self as usize].name
+    }
+}
+
+fn with_new_path(kind: MutationKind) -> MutationProbabilities {
+    MutationProbabilities::with_new_path(kind.name()).unwrap()
+}
+
+/// Blind selection with fixed probabilities (mutations that do not apply are counted as such),
+/// each mutation's own ratio.
 fn mutations(probabilities: MutationProbabilities) -> Mutations {
     Mutations {
         max_edges: MAX_EDGES,
         importance: ImportanceKind::Luminance,
         probabilities,
         perturbation: Default::default(),
+        rule: MixtureRule::PerComponent,
+        selection: Selection::Fixed,
     }
 }
 
@@ -62,7 +98,7 @@ fn each_mutation_with_new_paths_converges_to_bdpt() {
             if kind == MutationKind::NewPath {
                 continue;
             }
-            let mlt = PathMlt::new(mutations(MutationProbabilities::with_new_path(kind))).unwrap();
+            let mlt = PathMlt::new(mutations(with_new_path(kind))).unwrap();
             let (images, stats) = runs(&scene, &mlt);
             let p = min_p(&images, &reference);
             let k = &stats.kinds[kind as usize];
@@ -109,11 +145,11 @@ fn full_mutation_set_converges_to_bdpt_on_every_builtin_scene() {
 fn inapplicable_mutations_are_counted() {
     let scene = scene("cornell");
     for kind in [MutationKind::Caustic, MutationKind::LensSubpath] {
-        let mlt = PathMlt::new(mutations(MutationProbabilities::with_new_path(kind))).unwrap();
+        let mlt = PathMlt::new(mutations(with_new_path(kind))).unwrap();
         let settings = MetropolisSettings {
             chains: 64,
             bootstrap: 4000,
-            budget: Budget::MutationsPerPixel(8.0),
+            budget: Budget::SamplesPerPixel(8.0),
             seed: 3,
             seeding: Seeding::Resample,
         };
@@ -146,8 +182,11 @@ impl Method for ForgetsStrategyChoice {
     fn groups(&self) -> usize {
         self.0.groups()
     }
-    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> PathState {
+    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (PathState, f64) {
         self.0.independent(scene, g, seed)
+    }
+    fn ln_density(&self, scene: &Scene, s: &PathState) -> f64 {
+        self.0.ln_density(scene, s)
     }
     fn bootstrap_done(&self, b: &[f64]) {
         self.0.bootstrap_done(b)
@@ -160,15 +199,24 @@ impl Method for ForgetsStrategyChoice {
         rng: &mut ChainRng,
         observer: &mut O,
     ) {
-        let np = self.0.new_path();
-        let m = &self.0.mutations;
+        let settings = self.0.mutations.settings(self.0.new_path());
+        let mutation = |k: MutationKind| Mutations::mutation(scene, &settings, k.name()).unwrap();
+        let (lens, new_path) = (
+            mutation(MutationKind::Lens),
+            mutation(MutationKind::NewPath),
+        );
         for _ in 0..n {
             let kind = if uniform(rng) < 0.5 {
                 MutationKind::Lens
             } else {
                 MutationKind::NewPath
             };
-            match m.propose(scene, kind, &np, &chain.state, rng, &mut chain.candidate) {
+            let m = if kind == MutationKind::Lens {
+                &lens
+            } else {
+                &new_path
+            };
+            match m.propose_ratio(&chain.state, rng, &mut chain.candidate) {
                 Ok(mut r) => {
                     if kind == MutationKind::NewPath {
                         let (kx, ky) = (chain.state.path.edges(), chain.candidate.path.edges());
@@ -189,12 +237,8 @@ impl Method for ForgetsStrategyChoice {
 #[test]
 fn new_path_mutation_without_strategy_choice_is_caught() {
     let scene = scene("cornell");
-    let broken = ForgetsStrategyChoice(
-        PathMlt::new(mutations(MutationProbabilities::with_new_path(
-            MutationKind::Lens,
-        )))
-        .unwrap(),
-    );
+    let broken =
+        ForgetsStrategyChoice(PathMlt::new(mutations(with_new_path(MutationKind::Lens))).unwrap());
     let p = min_p(&runs(&scene, &broken).0, &bdpt_batches(&scene));
     println!("forgotten 1/(k+1): p = {p:.3e}");
     assert!(
@@ -216,9 +260,7 @@ fn erpt_settings() -> ErptSettings {
 fn erpt_runs<E: Estimator>(scene: &Scene, e: &E) -> Vec<Vec<f64>> {
     (0..8)
         .map(|r| {
-            let (film, _) = render(scene, e, PassBudget::SamplesPerPixel(4), 700 + r, |_, _| {
-                true
-            });
+            let (film, _) = render(scene, e, Budget::SamplesPerPixel(4.0), 700 + r, |_, _| true);
             assert_eq!(film.discarded, 0);
             blocks(&Image::from_film(&film))
         })
@@ -258,9 +300,9 @@ impl Estimator for ErptWithoutMis {
         let n = self.0.settings.chain_length;
         let mut seeds = Vec::new();
         seed_paths(scene, m, pixel, stream, &mut seeds);
-        let np = NewPath::uniform(m.max_edges);
-        let mut rec = SplatRecorder {
-            splats,
+        let proposal = m.proposal(scene, NewPath::uniform(m.max_edges)).unwrap();
+        let mut rec = ExpectedValue {
+            recorder: splats,
             b: self.0.quantum / n as f64,
         };
         for (state, _) in seeds {
@@ -272,7 +314,7 @@ impl Estimator for ErptWithoutMis {
             let count = (e / self.0.quantum + uniform(&mut stream.rng)).floor() as u64;
             for _ in 0..count {
                 let mut chain = Chain::with_density(state.clone(), 0.0).unwrap();
-                m.run(scene, &np, &mut chain, n, &mut stream.rng, &mut rec);
+                Mutations::run(&proposal, &mut chain, n, &mut stream.rng, &mut rec);
             }
         }
         Rgb::BLACK

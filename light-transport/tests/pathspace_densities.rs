@@ -44,17 +44,56 @@ use light_transport::math::DVec3;
 use light_transport::metropolis::ImportanceKind;
 use light_transport::path::{Vertex, VertexKind};
 use light_transport::pathspace::{
-    Bidirectional, Deletion, FullPath, MutationKind, MutationProbabilities, Mutations, NewPath,
-    PathState, PerturbationSettings,
+    Bidirectional, Deletion, FullPath, MutationProbabilities, Mutations, NewPath, PathState,
+    PerturbationSettings,
 };
 use light_transport::sampler::IndependentStream;
 use light_transport::scene::Scene;
 use light_transport::scene::builtin::SceneBuilder;
-use mcmc_core::ChainRng;
 use mcmc_core::rng::stream;
+use mcmc_core::{ChainRng, Failure};
 use std::collections::BTreeMap;
 use std::f64::consts::{PI, TAU};
 use std::sync::OnceLock;
+
+/// The mutations under test, by their registered names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum MutationKind {
+    Bidirectional,
+    LensSubpath,
+    Lens,
+    Caustic,
+    MultiChain,
+    NewPath,
+}
+
+impl MutationKind {
+    fn name(&self) -> &'static str {
+        match self {
+            MutationKind::Bidirectional => "bidirectional",
+            MutationKind::LensSubpath => "lens-subpath",
+            MutationKind::Lens => "lens",
+            MutationKind::Caustic => "caustic",
+            MutationKind::MultiChain => "multi-chain",
+            MutationKind::NewPath => "new-path",
+        }
+    }
+}
+
+/// Propose with the registered mutation `kind` (new paths of lengths `np`): its reported log
+/// acceptance ratio.
+fn propose(
+    kind: MutationKind,
+    np: &NewPath,
+    x: &PathState,
+    rng: &mut ChainRng,
+    y: &mut PathState,
+) -> Result<f64, Failure> {
+    let f = fx();
+    let settings = mutations().settings(np.clone());
+    let mutation = Mutations::mutation(&f.scene, &settings, kind.name()).expect("registered");
+    mutation.propose_ratio(x, rng, y)
+}
 
 // ---------------------------------------------------------------------------------------------
 // The scene and an independent model of its camera and emitter.
@@ -207,6 +246,8 @@ fn fx() -> &'static Fixture {
 
 fn mutations() -> Mutations {
     Mutations {
+        rule: mcmc_core::proposals::MixtureRule::PerComponent,
+        selection: mcmc_core::proposals::Selection::Fixed,
         max_edges: MAX_EDGES,
         importance: IMPORTANCE,
         probabilities: MutationProbabilities::default(),
@@ -723,7 +764,6 @@ fn densities(
 /// `max_proposals` were made.
 fn pointwise(kind: MutationKind, want: usize, max_proposals: usize, seed: u64) -> Tally {
     let f = fx();
-    let m = mutations();
     let np = new_path_lengths();
     let bd = Bidirectional {
         max_edges: MAX_EDGES,
@@ -745,7 +785,7 @@ fn pointwise(kind: MutationKind, want: usize, max_proposals: usize, seed: u64) -
         });
         y.path.vertices.clear();
         y.strategy.clear();
-        let reported = match m.propose(&f.scene, kind, &np, x, &mut rng, &mut y) {
+        let reported = match propose(kind, &np, x, &mut rng, &mut y) {
             Err(_) => {
                 t.errors += 1;
                 continue;
@@ -1029,13 +1069,12 @@ fn camera_side_estimate(kind: MutationKind, seed: u64) -> Estimate {
             "{r:?} {rx:?}"
         );
     }
-    let m = mutations();
     let np = new_path_lengths();
     let mut y = PathState::default();
     let name = format!("{} perturbation", kind.name());
     estimate(&name, patch.area(), 200_000, seed, |rng| {
         y.path.vertices.clear();
-        m.propose(&f.scene, kind, &np, &x, rng, &mut y).ok()?;
+        propose(kind, &np, &x, rng, &mut y).ok()?;
         let yv = &y.path.vertices;
         (yv.len() == 3 && patch.contains(&yv[1])).then(|| {
             let t = t_lens(f, &xv, yv, 0.0);
@@ -1077,13 +1116,11 @@ fn caustic_estimate() -> &'static Estimate {
                 "{theta}"
             );
         }
-        let m = mutations();
         let np = new_path_lengths();
         let mut y = PathState::default();
         estimate("caustic perturbation", patch.area(), 200_000, 203, |rng| {
             y.path.vertices.clear();
-            m.propose(&f.scene, MutationKind::Caustic, &np, &x, rng, &mut y)
-                .ok()?;
+            propose(MutationKind::Caustic, &np, &x, rng, &mut y).ok()?;
             let yv = &y.path.vertices;
             (yv.len() == 3 && patch.contains(&yv[1])).then(|| {
                 let t = t_caustic(f, &xv, yv, 0.0);
@@ -1107,13 +1144,11 @@ fn lens_subpath_estimate() -> &'static Estimate {
                 "patch corner {c:?} outside the image"
             );
         }
-        let m = mutations();
         let np = new_path_lengths();
         let mut y = PathState::default();
         estimate("lens subpath", patch.area(), 200_000, 204, |rng| {
             y.path.vertices.clear();
-            m.propose(&f.scene, MutationKind::LensSubpath, &np, &x, rng, &mut y)
-                .ok()?;
+            propose(MutationKind::LensSubpath, &np, &x, rng, &mut y).ok()?;
             let yv = &y.path.vertices;
             (yv.len() == 3 && patch.contains(&yv[1])).then(|| {
                 let t = t_lens_subpath(f, yv);
@@ -1222,7 +1257,6 @@ fn new_path_estimate() -> &'static Estimate {
                 "patch corner {c:?} outside the image"
             );
         }
-        let m = mutations();
         let np = new_path_lengths();
         let mut y = PathState::default();
         estimate(
@@ -1232,8 +1266,7 @@ fn new_path_estimate() -> &'static Estimate {
             207,
             |rng| {
                 y.path.vertices.clear();
-                m.propose(&f.scene, MutationKind::NewPath, &np, &x, rng, &mut y)
-                    .ok()?;
+                propose(MutationKind::NewPath, &np, &x, rng, &mut y).ok()?;
                 let yv = &y.path.vertices;
                 let hit = yv.len() == 3
                     && f.scene.light_at(yv[0].point.primitive).is_some()

@@ -258,7 +258,7 @@ fn partial_and_full(
             continue;
         }
         assert!(a.invert(&x, &mut u, &mut rng));
-        assert!(b.reparameterise(&x, &a, &u, &mut partial, &mut rng));
+        assert!(b.partial_inverse(&x, &a, &u, &mut partial, &mut rng));
         tamper(&mut partial, &mut rng);
         assert!(b.invert(&x, &mut full, &mut rng));
         if b.forward(&partial, &mut y) {

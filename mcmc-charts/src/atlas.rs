@@ -73,9 +73,17 @@ impl<X, C: Chart<X>> std::fmt::Debug for Atlas<X, C> {
     }
 }
 
+impl<X> Atlas<X> {
+    /// An atlas of boxed `charts` of any types (no identity chart).
+    pub fn new(charts: Vec<Box<dyn Chart<X>>>) -> Self {
+        Self::of(charts)
+    }
+}
+
 impl<X, C: Chart<X>> Atlas<X, C> {
-    /// An atlas of `charts` (no identity chart).
-    pub fn new(charts: Vec<C>) -> Self {
+    /// An atlas of `charts` of one type (no identity chart); charts of a concrete type can use
+    /// their [`Chart::partial_inverse`] in swaps.
+    pub fn of(charts: Vec<C>) -> Self {
         Self {
             charts,
             with_identity: false,
@@ -141,8 +149,35 @@ impl<X, C: Chart<X>> Atlas<X, C> {
         }
     }
 
+    /// Draw the coordinates of point `x` in level `to` into `u` (resized; emptied for the
+    /// identity), given that level `from` reaches it with coordinates `u_from`: through
+    /// [`Chart::partial_inverse`] when both levels are charts, else the full inverse. `false`
+    /// when `x` is not in the image of `to`.
+    pub fn inverse_from(
+        &self,
+        to: usize,
+        x: &X,
+        from: usize,
+        u_from: &[f64],
+        u: &mut Vec<f64>,
+        rng: &mut ChainRng,
+    ) -> bool {
+        u.resize(self.dim(to), 0.0);
+        match (self.chart(to), self.chart(from)) {
+            (Some(c), Some(f)) => c.partial_inverse(x, f, u_from, u, rng),
+            (Some(c), None) => c.invert(x, u, rng),
+            (None, _) => true,
+        }
+    }
+
+    /// `ln λ_level(u)` (the level's inverse bias at `x`; 0 for the identity).
+    pub fn ln_inverse_bias(&self, level: usize, x: &X, u: &[f64]) -> f64 {
+        self.chart(level).map_or(0.0, |c| c.ln_inverse_bias(x, u))
+    }
+
     /// Re-parameterise the point of `from` in chart `to`: `to.u ~ R_to(x)` (through
-    /// [`Chart::partial_inverse`] when both levels are charts), copying the cached evaluation. Returns the Green ratio `ln p_to(x) − ln p_from(x) + ln λ_from(u) − ln λ_to(u')`
+    /// [`Chart::partial_inverse`] when both levels are charts), copying the cached evaluation.
+    /// Returns the Green ratio `ln p_to(x) − ln p_from(x) + ln λ_from(u) − ln λ_to(u')`
     /// (λ: the charts' inverse biases), or `-inf` when the point is not in the image of `to`.
     pub fn reparameterise(
         &self,
@@ -160,34 +195,20 @@ impl<X, C: Chart<X>> Atlas<X, C> {
         to.fresh = from.fresh;
         to.importance = from.importance;
         to.ln_p.clone_from(&from.ln_p);
-        let dim = self.dim(to_chart);
-        to.u.resize(dim, 0.0);
+        to.u.resize(self.dim(to_chart), 0.0);
         if !from.valid {
             return f64::NEG_INFINITY;
         }
         let ln_p_to = self.ln_density(to_chart, &from.x);
         let ln_p_from = self.ln_density(from.chart, &from.x);
-        if ln_p_to == f64::NEG_INFINITY {
+        if ln_p_to == f64::NEG_INFINITY
+            || !self.inverse_from(to_chart, &from.x, from.chart, &from.u, &mut to.u, rng)
+        {
             to.valid = false;
             return f64::NEG_INFINITY;
         }
-        let inverted = match (self.chart(to_chart), self.chart(from.chart)) {
-            (Some(c), Some(f)) => c.partial_inverse(&from.x, f, &from.u, &mut to.u, rng),
-            (Some(c), None) => c.invert(&from.x, &mut to.u, rng),
-            (None, _) => true,
-        };
-        if !inverted {
-            to.valid = false;
-            return f64::NEG_INFINITY;
-        }
-        let bias_from = self
-            .chart(from.chart)
-            .map(|c| c.ln_inverse_bias(&from.x, &from.u))
-            .unwrap_or(0.0);
-        let bias_to = self
-            .chart(to_chart)
-            .map(|c| c.ln_inverse_bias(&from.x, &to.u))
-            .unwrap_or(0.0);
+        let bias_from = self.ln_inverse_bias(from.chart, &from.x, &from.u);
+        let bias_to = self.ln_inverse_bias(to_chart, &from.x, &to.u);
         ln_p_to - ln_p_from + bias_from - bias_to
     }
 }

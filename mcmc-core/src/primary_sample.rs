@@ -45,14 +45,20 @@ impl PrimarySample {
     /// are created uniformly on first read).
     pub fn new(streams: usize, step: SmallStep, seed: u64) -> Result<Self, McmcError> {
         step.validate()?;
-        Ok(Self {
+        Ok(Self::with_validated_step(streams, step, seed))
+    }
+
+    /// [`PrimarySample::new`] for a step that was validated already (a [`Kelemen`] proposal built
+    /// with [`Kelemen::new`]); an invalid step is not an error here, perturbations stay in `[0, 1)`.
+    pub fn with_validated_step(streams: usize, step: SmallStep, seed: u64) -> Self {
+        Self {
             streams: vec![Stream::default(); streams.max(1)],
             iteration: 0,
             last_large: 0,
             large: false,
             step,
             rng: ChainRng::seed_from_u64(seed),
-        })
+        }
     }
 
     /// A state with the given coordinates, current as of iteration 0 (e.g. a recorded vector).

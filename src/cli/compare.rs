@@ -3,18 +3,18 @@
 //! final images with their error images, and one side-by-side PNG.
 
 use super::CliError;
-use super::algo::{self, Algo, RenderOptions};
 use super::duration::parse_duration;
-use super::metropolis::{MetropolisArgs, run_method};
+use super::options::RenderOptions;
 use super::plot::{Series, error_plot};
+use super::registry::{self, AlgoArgs, Entry};
 use super::render::write_outputs;
+use super::run::run_renderer;
 use super::scene_arg;
 use clap::Args;
+use light_transport::Budget;
 use light_transport::film::Film;
 use light_transport::film::{Image, error_image, metrics, read_image, write_bytes_png};
-use light_transport::integrators::{Budget, Estimator, render};
-use light_transport::metropolis::Method;
-use light_transport::scene::Scene;
+use light_transport::renderer::{Passes, Progress};
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -25,8 +25,8 @@ pub struct CompareArgs {
     /// Scene: a built-in name or a pbrt-v3 file.
     pub scene: String,
     /// Algorithms, comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "pt,bdpt")]
-    pub algos: Vec<Algo>,
+    #[arg(long, value_delimiter = ',', value_parser = registry::algo_parser(), default_value = "pt,bdpt")]
+    pub algos: Vec<&'static Entry>,
     /// Time per algorithm.
     #[arg(long, value_parser = parse_duration, default_value = "30s")]
     pub time: Duration,
@@ -39,15 +39,9 @@ pub struct CompareArgs {
     /// Seed, depth, resolution, exposure, MIS.
     #[command(flatten)]
     pub options: RenderOptions,
-    /// Metropolis options (pssmlt, mmlt, mlt, cmlt).
+    /// The algorithms' options.
     #[command(flatten)]
-    pub metropolis: MetropolisArgs,
-    /// Path-space options (mlt, erpt).
-    #[command(flatten)]
-    pub pathspace: super::pathspace::PathSpaceArgs,
-    /// Charted MLT options (cmlt).
-    #[command(flatten)]
-    pub cmlt: super::cmlt::CmltArgs,
+    pub algo_options: AlgoArgs,
     /// Output folder. Default: `out/compare-<scene>`.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
@@ -124,65 +118,45 @@ impl<'a> Checkpoints<'a> {
     }
 }
 
-fn track<E: Estimator>(
-    scene: &Scene,
-    est: &E,
+/// Render one algorithm for the comparison's time, recording the checkpoints. For Metropolis
+/// methods the clock includes the bootstrap and seeding.
+fn track(
+    scene: &light_transport::scene::Scene,
+    entry: &'static Entry,
     a: &CompareArgs,
-    name: &'static str,
     reference: &Image,
     rows: &mut Vec<Row>,
-) -> Result<Image, CliError> {
-    let mut cp = Checkpoints::new(a, name, reference, rows);
-    let (film, stats) = render(
+) -> Result<(Image, bool), CliError> {
+    let renderer = (entry.build)(scene, &a.options.common(), &a.algo_options)?;
+    let mut cp = Checkpoints::new(a, entry.name, reference, rows);
+    let (film, report) = run_renderer(
         scene,
-        est,
+        renderer.as_ref(),
         Budget::Time(a.time),
         a.options.seed,
-        |film, p| cp.see(film, p.elapsed, p.passes),
-    );
-    cp.record(&film, stats.elapsed, stats.passes, true);
+        true,
+        |film: &Film, p: &Progress| cp.see(film, p.elapsed, p.samples_per_pixel as u64),
+    )?;
+    cp.record(&film, report.elapsed, report.samples_per_pixel as u64, true);
     cp.finish()?;
+    let secs = report.elapsed.as_secs_f64().max(1e-9);
     eprintln!(
-        "  {name}: {} samples per pixel in {:.1} s, {:.2} M rays/s",
-        super::render::spp_text(stats.samples_per_pixel),
-        stats.elapsed.as_secs_f64(),
-        stats.rays as f64 / stats.elapsed.as_secs_f64().max(1e-9) / 1e6
+        "  {}: {} per pixel in {:.1} s, {:.2} M samples/s, {:.2} M rays/s{}",
+        entry.name,
+        super::render::spp_text(report.samples_per_pixel),
+        secs,
+        report.samples as f64 / secs / 1e6,
+        report.rays as f64 / secs / 1e6,
+        if report.interrupted {
+            " (interrupted)"
+        } else {
+            ""
+        }
     );
-    Ok(Image::from_film(&film))
-}
-
-/// A Metropolis method at equal time: the clock includes its bootstrap and seeding.
-fn track_metropolis<M: Method>(
-    scene: &Scene,
-    method: &M,
-    a: &CompareArgs,
-    name: &'static str,
-    reference: &Image,
-    rows: &mut Vec<Row>,
-) -> Result<Image, CliError> {
-    let start = std::time::Instant::now();
-    let pixels = (scene.camera.width * scene.camera.height) as u64;
-    let settings = a.metropolis.settings(
-        light_transport::metropolis::Budget::Time(a.time),
-        a.options.seed,
-    );
-    let mut cp = Checkpoints::new(a, name, reference, rows);
-    let (film, s) = run_method(scene, method, &settings, true, |film, mutations, _| {
-        cp.see(film, start.elapsed(), mutations / pixels.max(1))
-    })?;
-    cp.finish()?;
-    let acc = s.stats.total();
-    eprintln!(
-        "  {name}: {:.1} mutations per pixel, bootstrap {:.1} s, acceptance {:.1}%, {:.2} M mutations/s",
-        s.mutations as f64 / pixels as f64,
-        s.bootstrap_time.as_secs_f64(),
-        100.0 * acc.acceptance_rate(),
-        s.mutations as f64 / s.chain_time.as_secs_f64().max(1e-9) / 1e6
-    );
-    if s.kinds.len() > 1 {
-        eprint!("{}", s.stats.table(&s.kinds));
+    for line in &report.details {
+        eprintln!("    {line}");
     }
-    Ok(Image::from_film(&film))
+    Ok((Image::from_film(&film), report.interrupted))
 }
 
 pub fn run(a: CompareArgs) -> Result<(), CliError> {
@@ -201,7 +175,6 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
         path: dir.clone(),
         source,
     })?;
-    let common = a.options.common();
     let reference = match &a.reference {
         Some(p) => read_image(p)?,
         None => {
@@ -210,13 +183,15 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
                 "no --reference: rendering one with bdpt for {:.0} s",
                 t.as_secs_f64()
             );
-            let (film, _) = render(
+            let bdpt = Passes::new(super::algos::bdpt::bdpt(&a.options.common()));
+            let (film, _) = run_renderer(
                 &scene,
-                &algo::bdpt(&common),
+                &bdpt,
                 Budget::Time(t),
-                a.options.seed ^ 0xABCD,
-                |_, _| true,
-            );
+                a.options.seed ^ super::reference::REFERENCE_SEED,
+                false,
+                |_: &Film, _: &Progress| true,
+            )?;
             let img = Image::from_film(&film);
             write_outputs(
                 &img,
@@ -240,91 +215,21 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
     }
     let mut rows = Vec::new();
     let mut finals = Vec::new();
-    for algo in &a.algos {
-        eprintln!(
-            "rendering {} for {:.1} s",
-            algo.name(),
-            a.time.as_secs_f64()
-        );
-        let img = match algo {
-            Algo::Pt => track(
-                &scene,
-                &algo::path_tracer(&common),
-                &a,
-                "pt",
-                &reference,
-                &mut rows,
-            )?,
-            Algo::Lt => track(
-                &scene,
-                &algo::light_tracer(&common),
-                &a,
-                "lt",
-                &reference,
-                &mut rows,
-            )?,
-            Algo::Bdpt => track(
-                &scene,
-                &algo::bdpt(&common),
-                &a,
-                "bdpt",
-                &reference,
-                &mut rows,
-            )?,
-            Algo::Pssmlt => track_metropolis(
-                &scene,
-                &algo::pssmlt(&common, &a.metropolis)?,
-                &a,
-                "pssmlt",
-                &reference,
-                &mut rows,
-            )?,
-            Algo::Mmlt => track_metropolis(
-                &scene,
-                &algo::mmlt(&common, &a.metropolis)?,
-                &a,
-                "mmlt",
-                &reference,
-                &mut rows,
-            )?,
-            Algo::Mlt => track_metropolis(
-                &scene,
-                &a.pathspace.mlt(&common, &a.metropolis)?,
-                &a,
-                "mlt",
-                &reference,
-                &mut rows,
-            )?,
-            Algo::Cmlt => track_metropolis(
-                &scene,
-                &a.cmlt.cmlt(&scene, &common, &a.metropolis, &a.pathspace)?,
-                &a,
-                "cmlt",
-                &reference,
-                &mut rows,
-            )?,
-            Algo::Erpt => {
-                let e = a.pathspace.erpt(&scene, &common, &a.metropolis)?;
-                let img = track(&scene, &e, &a, "erpt", &reference, &mut rows)?;
-                let (stats, chains) = e.statistics();
-                let names = light_transport::pathspace::Mutations::kinds();
-                eprintln!(
-                    "  erpt: e_d = {:.3e}, {chains} chains of {} mutations, acceptance {:.1}%\n{}",
-                    e.quantum,
-                    e.settings.chain_length,
-                    100.0 * stats.total().acceptance_rate(),
-                    stats.table(&names)
-                );
-                img
-            }
-        };
+    let mut interrupted = false;
+    for &entry in &a.algos {
+        if interrupted {
+            break;
+        }
+        eprintln!("rendering {} for {:.1} s", entry.name, a.time.as_secs_f64());
+        let (img, stopped) = track(&scene, entry, &a, &reference, &mut rows)?;
+        interrupted = stopped;
         write_outputs(
             &img,
-            &dir.join(format!("{}.exr", algo.name())),
-            &dir.join(format!("{}.png", algo.name())),
+            &dir.join(format!("{}.exr", entry.name)),
+            &dir.join(format!("{}.png", entry.name)),
             a.options.exposure,
         )?;
-        finals.push((algo.name(), img));
+        finals.push((entry.name, img));
     }
     // CSV.
     let csv = dir.join("errors.csv");
@@ -408,6 +313,9 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
             .join(", "),
         side.display()
     );
+    if interrupted {
+        return Err(CliError::Interrupted);
+    }
     Ok(())
 }
 

@@ -1,17 +1,10 @@
-//! Options and runner of the Metropolis integrators (`--algo pssmlt|mmlt`).
+//! Options of the Metropolis integrators (`--algo pssmlt|mmlt|mlt|cmlt`).
 
 use super::CliError;
 use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressStyle};
-use light_transport::film::Film;
-use light_transport::metropolis::{
-    self, Budget, ImportanceKind, Method, MetropolisSettings, MetropolisStats,
-};
-use light_transport::scene::Scene;
+use light_transport::metropolis::{ImportanceKind, MetropolisSettings};
 use mcmc_core::primary_sample::Kelemen;
 use mcmc_core::proposals::SmallStep;
-use std::time::Duration;
-
 /// Small-step kernel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum SmallStepKind {
@@ -60,20 +53,6 @@ pub struct MetropolisArgs {
 }
 
 impl MetropolisArgs {
-    /// The documented defaults.
-    pub fn default_values() -> Self {
-        Self {
-            large_step: 0.3,
-            small_step: SmallStepKind::Exponential,
-            s1: 1.0 / 1024.0,
-            s2: 1.0 / 64.0,
-            sigma: 0.01,
-            chains: 1000,
-            bootstrap: 100_000,
-            importance: Importance::Luminance,
-        }
-    }
-
     /// The small-step kernel.
     pub fn small_step(&self) -> SmallStep {
         match self.small_step {
@@ -98,88 +77,12 @@ impl MetropolisArgs {
         }
     }
 
-    /// Driver settings for a budget.
-    pub fn settings(&self, budget: Budget, seed: u64) -> MetropolisSettings {
+    /// Driver settings (the budget and seed come with each render).
+    pub fn settings(&self) -> MetropolisSettings {
         MetropolisSettings {
             chains: self.chains,
             bootstrap: self.bootstrap,
-            budget,
-            seed,
-            seeding: Default::default(),
+            ..MetropolisSettings::default()
         }
     }
-}
-
-/// Run a Metropolis method with a progress bar; `every` sees the film after each round.
-pub fn run_method<M: Method>(
-    scene: &Scene,
-    method: &M,
-    settings: &MetropolisSettings,
-    quiet: bool,
-    mut every: impl FnMut(&Film, u64, Duration) -> bool,
-) -> Result<(Film, MetropolisStats), CliError> {
-    let pixels = (scene.camera.width * scene.camera.height) as f64;
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        match settings.budget {
-            Budget::MutationsPerPixel(m) => ProgressBar::new((m * pixels) as u64),
-            Budget::Time(t) => ProgressBar::new(t.as_millis() as u64),
-        }
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    bar.set_message("bootstrap");
-    let out = metropolis::run(scene, method, settings, |film, mutations, elapsed| {
-        match settings.budget {
-            Budget::MutationsPerPixel(_) => bar.set_position(mutations),
-            Budget::Time(_) => bar.set_position(elapsed.as_millis() as u64),
-        }
-        bar.set_message(format!(
-            "{:.1} mutations/pixel, {:.2} M mutations/s",
-            mutations as f64 / pixels,
-            mutations as f64 / elapsed.as_secs_f64().max(1e-9) / 1e6
-        ));
-        every(film, mutations, elapsed)
-    })?;
-    bar.finish_and_clear();
-    Ok(out)
-}
-
-/// Print the statistics of a Metropolis render.
-pub fn print_stats(s: &MetropolisStats, pixels: f64) {
-    println!(
-        "bootstrap  {:.2} s, normalisation b = {:.5e} ({} of the samples carry light{}), seeding {:.2} s",
-        s.bootstrap_time.as_secs_f64(),
-        s.normalisation,
-        s.bootstrap_nonzero,
-        if s.bootstrap_discarded > 0 {
-            format!(", {} non-finite discarded", s.bootstrap_discarded)
-        } else {
-            String::new()
-        },
-        s.seed_time.as_secs_f64()
-    );
-    if s.group_chains.len() > 1 {
-        let groups: Vec<String> = s
-            .group_chains
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| **c > 0)
-            .map(|(g, c)| format!("k={}:{c}", g + 1))
-            .collect();
-        println!("chains     per path length {}", groups.join(" "));
-    }
-    let secs = s.chain_time.as_secs_f64().max(1e-9);
-    println!(
-        "chains     {:.2} s, {} mutations ({:.1} per pixel), {:.2} M mutations/s, {:.2} M rays/s",
-        secs,
-        s.mutations,
-        s.mutations as f64 / pixels,
-        s.mutations as f64 / secs / 1e6,
-        s.rays as f64 / secs / 1e6
-    );
-    print!("{}", s.stats.table(&s.kinds));
 }

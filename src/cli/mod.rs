@@ -1,16 +1,19 @@
 //! Command-line interface.
 
-mod algo;
-mod cmlt;
+mod algos;
 mod compare;
 mod diff;
 mod duration;
 mod info;
+pub mod interrupt;
 mod metropolis;
+mod options;
 mod pathspace;
 mod plot;
 mod reference;
+mod registry;
 mod render;
+mod run;
 mod scene_arg;
 mod shard;
 
@@ -26,6 +29,9 @@ pub enum CliError {
     /// Bad arguments.
     #[error("{0}")]
     Usage(String),
+    /// The render was interrupted (its work was written).
+    #[error("interrupted (the work done so far was written)")]
+    Interrupted,
     /// File system.
     #[error("{path}: {source}")]
     Io {

@@ -2,25 +2,41 @@
 //! perturbations' offsets, and ERPT's chains.
 
 use super::CliError;
-use super::algo::Common;
 use super::metropolis::MetropolisArgs;
-use clap::Args;
-use light_transport::pathspace::{
-    Erpt, ErptSettings, MutationKind, MutationProbabilities, Mutations, PathMlt,
-    PerturbationSettings,
-};
-use light_transport::scene::Scene;
-use mcmc_core::Stats;
+use super::registry::Common;
+use clap::{Args, ValueEnum};
+use light_transport::pathspace::{MutationProbabilities, Mutations, PerturbationSettings};
+use mcmc_core::proposals::{MixtureRule, Selection};
 
 fn parse_probabilities(s: &str) -> Result<MutationProbabilities, String> {
     s.parse().map_err(|e: light_transport::Error| e.to_string())
 }
 
+/// How a mixture of mutations reports its transition density.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Rule {
+    /// Each mutation's own ratio (Tierney 1998; seed 002 eq. 5).
+    PerComponent,
+    /// The ratio of the whole mixture's densities `Σ_k P_k T_k` (seed 002 eq. 4).
+    Combined,
+}
+
+/// How mutations are chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Choice {
+    /// With their weights, restricted to those that apply to the current path (exact: the
+    /// selection probabilities enter the acceptance).
+    Suitable,
+    /// With fixed weights; mutations that do not apply count as rejected proposals.
+    Fixed,
+}
+
 /// Path-space MLT and ERPT options.
 #[derive(Args, Debug, Clone)]
 pub struct PathSpaceArgs {
-    /// Mutation probabilities of `mlt`, `name=p,...` over bidirectional, lens-subpath, lens,
-    /// caustic, multi-chain, new-path (unnamed kinds get 0; normalised).
+    /// Mutation probabilities of `mlt` (and of cmlt's path-space moves), `name=p,...` over
+    /// bidirectional, lens-subpath, lens, caustic, multi-chain, new-path (unnamed kinds get 0;
+    /// normalised).
     #[arg(
         long,
         value_parser = parse_probabilities,
@@ -34,6 +50,13 @@ pub struct PathSpaceArgs {
         default_value = "lens=0.4,caustic=0.3,multi-chain=0.3"
     )]
     pub erpt_mutations: MutationProbabilities,
+    /// Transition densities of the mutation mixture: each mutation's own, or the combined
+    /// `Σ P_k T_k` of all of them.
+    #[arg(long, value_enum, default_value_t = Rule::PerComponent)]
+    pub mixture_rule: Rule,
+    /// How mutations are chosen: among those that apply to the current path, or blindly.
+    #[arg(long, value_enum, default_value_t = Choice::Suitable)]
+    pub mutation_choice: Choice,
     /// Smallest pixel offset of the lens and multi-chain perturbations (pixels).
     #[arg(long, default_value_t = 0.1)]
     pub r1: f64,
@@ -55,7 +78,8 @@ pub struct PathSpaceArgs {
 }
 
 impl PathSpaceArgs {
-    fn perturbation(&self) -> PerturbationSettings {
+    /// The perturbations' offsets.
+    pub fn perturbation(&self) -> PerturbationSettings {
         PerturbationSettings {
             r1: self.r1,
             r2_fraction: self.r2,
@@ -64,53 +88,28 @@ impl PathSpaceArgs {
         }
     }
 
-    /// Path-space MLT.
-    pub fn mlt(&self, c: &Common, m: &MetropolisArgs) -> Result<PathMlt, CliError> {
-        Ok(PathMlt::new(Mutations {
+    /// A mutation set with `probabilities` (validated).
+    pub fn mutations(
+        &self,
+        c: &Common,
+        m: &MetropolisArgs,
+        probabilities: &MutationProbabilities,
+    ) -> Result<Mutations, CliError> {
+        let mutations = Mutations {
             max_edges: c.max_edges,
             importance: m.importance(),
-            probabilities: self.mutations,
+            probabilities: probabilities.clone(),
             perturbation: self.perturbation(),
-        })?)
-    }
-
-    /// ERPT (runs its pilot on `scene`).
-    pub fn erpt(&self, scene: &Scene, c: &Common, m: &MetropolisArgs) -> Result<Erpt, CliError> {
-        let mut settings = ErptSettings::new(c.max_edges);
-        settings.mutations.importance = m.importance();
-        settings.mutations.probabilities = self.erpt_mutations;
-        settings.mutations.perturbation = self.perturbation();
-        settings.chain_length = self.erpt_chain_length;
-        settings.chains_per_seed = self.erpt_chains;
-        Ok(Erpt::new(scene, settings)?)
-    }
-}
-
-/// Print ERPT's statistics: quantum, chains, acceptance per mutation kind.
-pub fn print_erpt_stats(erpt: &Erpt, pixels: f64) {
-    let (stats, chains): (Stats, u64) = erpt.statistics();
-    let names: Vec<String> = MutationKind::ALL
-        .iter()
-        .map(|k| k.name().to_string())
-        .collect();
-    println!(
-        "erpt       energy quantum e_d = {:.4e}, {} chains of {} mutations ({:.2} chains per pixel)",
-        erpt.quantum,
-        chains,
-        erpt.settings.chain_length,
-        chains as f64 / pixels
-    );
-    print!("{}", stats.table(&names));
-}
-
-impl PathSpaceArgs {
-    /// The documented defaults (parsed from an empty command line, so they cannot drift).
-    pub fn default_values() -> Self {
-        #[derive(clap::Parser)]
-        struct Wrapper {
-            #[command(flatten)]
-            p: PathSpaceArgs,
-        }
-        <Wrapper as clap::Parser>::parse_from(["charted"]).p
+            rule: match self.mixture_rule {
+                Rule::PerComponent => MixtureRule::PerComponent,
+                Rule::Combined => MixtureRule::Combined,
+            },
+            selection: match self.mutation_choice {
+                Choice::Suitable => Selection::Suitability,
+                Choice::Fixed => Selection::Fixed,
+            },
+        };
+        mutations.validate()?;
+        Ok(mutations)
     }
 }

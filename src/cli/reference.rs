@@ -1,8 +1,9 @@
 //! `charted reference`: a long unbiased render to compare against (BDPT by default).
 
 use super::CliError;
-use super::algo::{Algo, RenderOptions};
 use super::duration::parse_duration;
+use super::options::RenderOptions;
+use super::registry::{self, AlgoArgs, Entry};
 use super::render::{self, RenderArgs};
 use clap::Args;
 use std::path::PathBuf;
@@ -15,8 +16,8 @@ pub struct ReferenceArgs {
     #[arg(default_value = "cornell")]
     pub scene: String,
     /// Unbiased algorithm.
-    #[arg(long, value_enum, default_value_t = Algo::Bdpt)]
-    pub algo: Algo,
+    #[arg(long, value_parser = registry::algo_parser(), default_value = "bdpt")]
+    pub algo: &'static Entry,
     /// Samples per pixel (default 1024 when no --time is given).
     #[arg(long, conflicts_with = "time")]
     pub spp: Option<u64>,
@@ -36,6 +37,18 @@ pub struct ReferenceArgs {
 pub const REFERENCE_SEED: u64 = 0x005e_ed0f_4ef0;
 
 pub fn run(mut a: ReferenceArgs) -> Result<(), CliError> {
+    if !a.algo.unbiased {
+        return Err(CliError::Usage(format!(
+            "{} is not an unbiased algorithm; references need one of {}",
+            a.algo.name,
+            registry::ALGORITHMS
+                .iter()
+                .filter(|e| e.unbiased)
+                .map(|e| e.name)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
     a.options.seed ^= REFERENCE_SEED;
     let name = super::scene_arg::load(&a.scene)?.name;
     render::run(RenderArgs {
@@ -52,9 +65,7 @@ pub fn run(mut a: ReferenceArgs) -> Result<(), CliError> {
         scene: a.scene,
         algo: a.algo,
         options: a.options,
-        metropolis: super::metropolis::MetropolisArgs::default_values(),
-        pathspace: super::pathspace::PathSpaceArgs::default_values(),
-        cmlt: super::cmlt::CmltArgs::default_values(),
+        algos: AlgoArgs::default_values(),
         write_every: Duration::from_secs(60),
         threads: None,
         quiet: false,

@@ -24,7 +24,10 @@ use proptest::test_runner::{Config, RngSeed};
 const ALPHA: f64 = 1e-4;
 
 type State = ChartState<P2>;
-type Target<'a> = ChartedTarget<'a, P2, Box<dyn Fn(&P2) -> f64 + Sync + 'a>>;
+type Integrand<'a> = Box<dyn Fn(&P2) -> f64 + Sync + 'a>;
+type Target<'a> = ChartedTarget<'a, P2, Integrand<'a>>;
+type JointTarget<'a> = mcmc_charts::Joint<'a, P2, Integrand<'a>>;
+type AnyChart = Box<dyn mcmc_charts::Chart<P2>>;
 
 fn config(cases: u32) -> Config {
     Config {
@@ -521,12 +524,7 @@ fn joint_exact<'a>(
     }
 }
 
-fn joint_step<K: Kernel<State>>(
-    j: &mcmc_charts::Joint<'_, P2, Box<dyn Fn(&P2) -> f64 + Sync + '_>>,
-    k: &mut K,
-    s: &mut State,
-    rng: &mut ChainRng,
-) {
+fn joint_step<K: Kernel<State>>(j: &JointTarget<'_>, k: &mut K, s: &mut State, rng: &mut ChainRng) {
     let l = mcmc_core::Target::evaluate(j, s);
     let mut c = Chain::unchecked(std::mem::take(s), l);
     k.step(&mut c, rng, &mut ());
@@ -572,7 +570,7 @@ proptest! {
     /// points by [`mcmc_charts::moves::exchange`]: the product law is kept.
     #[test]
     fn exchanges_and_chart_keeping_moves_keep_the_product_law(c1 in any_chart(), c2 in any_chart(), f in cells(), seed in any::<u64>()) {
-        use mcmc_charts::moves::{Exchange, PointMove, Refresh, exchange};
+        use mcmc_charts::moves::{PointMove, Refresh, exchange};
         let atlas = Atlas::new(vec![c1.boxed(), c2.boxed()]);
         let t = target(&atlas, &f, TargetKind::Weighted);
         let mut rng = stream(seed, 0);
@@ -586,10 +584,9 @@ proptest! {
         let mut mh = [0, 1].map(|k| MetropolisHastings::new(Level { family: &t, level: k }, &mix));
         let inv = invariance(&exact, |s: &mut Vec<State>, r: &mut ChainRng| {
                 for (k, st) in s.iter_mut().enumerate() { mh_step(&t, &mut mh[k], st, r); }
-                if let Exchange::Accepted(_, a, b) = exchange(&t, &s[0], &s[1], r) {
-                    s[0] = a;
-                    s[1] = b;
-                }
+                let e = exchange(&t, &s[0], &s[1], r);
+                let (a, b) = s.split_at_mut(1);
+                e.apply(&mut a[0], &mut b[0]);
             },
             |s: &Vec<State>| s.iter().flat_map(|st| { let mut v = st.x.to_vec(); v.extend(st.u.iter().take(3)); v }).collect(),
             &inv_config(3000, 2, false), &mut rng).unwrap();
@@ -604,15 +601,7 @@ proptest! {
 #[test]
 fn a_point_move_without_the_chart_terms_is_caught() {
     use mcmc_charts::moves::{PointMove, Refresh};
-    struct PointRatioOnly<'a>(
-        PointMove<
-            'a,
-            P2,
-            Box<dyn Fn(&P2) -> f64 + Sync + 'a>,
-            Box<dyn mcmc_charts::Chart<P2>>,
-            GaussianRandomWalk,
-        >,
-    );
+    struct PointRatioOnly<'a>(PointMove<'a, P2, Integrand<'a>, AnyChart, GaussianRandomWalk>);
     impl Proposal<State> for PointRatioOnly<'_> {
         fn propose(&self, x: &State, y: &mut State, rng: &mut ChainRng) -> mcmc_core::Proposed {
             let p = self.0.propose(x, y, rng);
@@ -661,9 +650,7 @@ fn a_point_move_without_the_chart_terms_is_caught() {
 #[test]
 fn a_chart_swap_without_its_proposal_ratio_is_caught() {
     use mcmc_charts::moves::ChartSwap;
-    struct NoRatio<'a>(
-        ChartSwap<'a, P2, Box<dyn Fn(&P2) -> f64 + Sync + 'a>, Box<dyn mcmc_charts::Chart<P2>>>,
-    );
+    struct NoRatio<'a>(ChartSwap<'a, P2, Integrand<'a>, AnyChart>);
     impl Proposal<State> for NoRatio<'_> {
         fn propose(&self, x: &State, y: &mut State, rng: &mut ChainRng) -> mcmc_core::Proposed {
             let p = self.0.propose(x, y, rng);

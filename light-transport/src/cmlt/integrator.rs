@@ -1,64 +1,78 @@
 //! Charted Metropolis light transport (charted-MLT paper, Algorithms 1–2) on the shared
-//! Metropolis driver.
+//! Metropolis driver, with the moves of `mcmc-charts`.
 //!
-//! Chains are grouped by path length `k`. A state is `(s, u, x̄)`: the technique chart `s` of
-//! length `k`, its primary numbers `u`, and the path `x̄ = T_s(u)`. The joint target is the
-//! weighted one (eq. 16), `π_s(u) = f(x̄) / Σ_{s'} p_{s'}(x̄)` — the same value in every chart at
-//! the same path (eq. 17) — with pseudo-prior weights `c_s = 1`, so the path marginal is `f` and,
-//! given the path, the chart is distributed by the balance weights `w_s = p_s/Σ p` and `u` by the
-//! chart's exact inverse. Moves (each preserves the joint target; see `mcmc_charts::moves` for the
-//! derivations):
+//! Chains are grouped by path length `k`. A state is an `mcmc_charts` [`ChartState`]: the
+//! technique chart `s` of length `k` ([`TechniqueChart`]), its primary numbers `u`, and the path
+//! `x̄ = T_s(u)`. The charts report densities in the measure `I(f) dμ`, in which the integrand is
+//! the constant 1 ([`unit_integrand`]); the family is `mcmc_charts`' weighted target (eq. 16),
+//! `π_s(u) = f(x̄) / Σ_{s'} p_{s'}(x̄)` — the same value in every chart at the same path (eq. 17)
+//! — with pseudo-priors `c_s = 1`, so the path marginal is `f` and, given the path, the chart is
+//! distributed by the balance weights `w_s = p_s/Σ p` and `u` by the chart's exact inverse. Every
+//! step is one Metropolis–Hastings step of the [`Joint`] target with a mixture of `mcmc-charts`
+//! moves (their derivations are in `mcmc_charts::moves`):
 //!
-//! * **small / large step** in the current chart: Kelemen's exponential (or Gaussian) offsets of
-//!   every coordinate, or a uniform `u`; accepted with `π_s(u')/π_s(u)`.
-//! * **chart swap** by serial tempering (on average one every `swap_every` mutations, default 16
-//!   as in the paper): propose `s'` with probability `q(s')` proportional to the technique's energy
-//!   (a deterministic pilot, mixed with 10% uniform), keep `x̄`, draw `u' ~ κ_{s'}(·|x̄)` (only
-//!   the vertices whose numbers differ between the two charts are inverted); accept
-//!   with `min(1, p_{s'}(x̄) q(s) / (p_s(x̄) q(s')))` — no evaluation of `f`.
-//! * **IPSM** (inverse primary-space perturbation, optional): in a uniformly chosen other chart
-//!   `j`, draw `u_j ~ κ_j(·|x̄)`, take a small step, map to `ȳ`; the path marginal `f` is preserved
-//!   by accepting with `I(C*_j(ȳ)) / I(C*_j(x̄))` (eq. 26), after which `(s, u)` is redrawn from its
-//!   conditional given `ȳ` (chart by balance weight, numbers by the exact inverse).
-//! * **path-space mutations** (optional, the identity chart): any mutation of
-//!   [`crate::pathspace`] moves `x̄` with target `f`; `(s, u)` is then redrawn given the new path.
+//! * **small / large step** in the current chart ([`InChart`]): Kelemen's exponential (or
+//!   Gaussian) offsets of every coordinate, or a uniform `u`.
+//! * **chart swap** by serial tempering ([`ChartSwap`], on average one every `swap_every`
+//!   mutations, default 16 as in the paper): `s'` proposed with probability `q(s')` proportional
+//!   to the technique's energy (a deterministic pilot, mixed with 10% uniform), `u' ~ κ_{s'}(·|x̄)`
+//!   by the charts' partial inverse (only the vertices whose numbers differ are inverted, §6.1);
+//!   accepted with `min(1, p_{s'}(x̄) q(s) / (p_s(x̄) q(s')))` — no evaluation of `f`.
+//! * **IPSM** (inverse primary-space perturbation, optional; [`InversePerturbation`] through a
+//!   uniformly chosen chart): the path moves by a small step in another chart's numbers, accepted
+//!   for the path marginal with `I(C*_j(ȳ)) / I(C*_j(x̄))` (eq. 26), then `(s, u)` is redrawn from
+//!   its conditional given `ȳ` ([`Refresh::Gibbs`]).
+//! * **path-space mutations** (optional; [`PointMove`]): the mixture of
+//!   [`crate::pathspace::mutations`] moves `x̄` with target `f`, then `(s, u)` is redrawn.
+//!
+//! With replica exchange instead of serial tempering ([`super::replica`]) every chain keeps its
+//! chart: no swap move, and IPSM and path-space moves keep the chart ([`Refresh::KeepChart`],
+//! acceptance × `w_s(ȳ)/w_s(x̄)`).
 //!
 //! The recorded colour is the path's balance-heuristic value `f / Σ p` (importance `π_s(u)`), as
 //! for path-space MLT.
 
-use super::technique::TechniqueChart;
-use crate::metropolis::{Contribution, ImportanceKind, Method, Recordable};
+use super::technique::{TechniqueChart, unit_integrand};
+use crate::metropolis::{ImportanceKind, Method, Recordable};
 use crate::pathspace::{
-    MutationKind, MutationProbabilities, Mutations, NewPath, PathState, PerturbationSettings,
+    MutationProbabilities, Mutations, NewPath, PathState, PerturbationSettings,
 };
 use crate::scene::Scene;
 use crate::{Error, Result};
-use mcmc_charts::Chart;
+use mcmc_charts::moves::{ChartSwap, InChart, InversePerturbation, PointMove, Refresh};
+use mcmc_charts::{Atlas, Chart, ChartState, ChartedTarget, Joint, TargetKind};
 use mcmc_core::kernel::Observer;
-use mcmc_core::proposals::SmallStep;
-use mcmc_core::rng::{categorical, stream, uniform};
-use mcmc_core::{Chain, ChainRng, Failure};
+use mcmc_core::proposals::{CubeWalk, Independence, Mixture, MixtureRule, SmallStep, UniformCube};
+use mcmc_core::rng::{stream, uniform, uniform_index};
+use mcmc_core::tempering::LevelProposal;
+use mcmc_core::{Chain, ChainRng, Family, Kernel, MetropolisHastings, Proposal, Target};
 
-/// A CMLT chain state.
-#[derive(Clone, Debug, Default)]
-pub struct CmltState {
-    /// Path length (edges).
-    pub k: usize,
-    /// The current technique chart: light vertices `s`.
-    pub chart: usize,
-    /// Its primary numbers.
-    pub u: Vec<f64>,
-    /// The path and its strategies; its contribution is the recorded splat.
-    pub x: PathState,
-    /// Whether the contribution still carries the bootstrap's factor `k + 1`.
-    pub bootstrap_scaled: bool,
-}
+/// A CMLT chain state: technique chart, numbers and path.
+pub type CmltState = ChartState<PathState>;
 
 impl Recordable for CmltState {
-    fn contribution(&self) -> &Contribution {
+    fn contribution(&self) -> &crate::metropolis::Contribution {
         &self.x.contribution
     }
 }
+
+/// The integrand of the technique charts, as a function pointer (one type for every target).
+pub type UnitIntegrand = fn(&PathState) -> f64;
+
+/// The technique charts of one path length.
+pub type TechniqueAtlas<'a> = Atlas<PathState, TechniqueChart<'a>>;
+
+/// The weighted targets over a [`TechniqueAtlas`].
+pub type TechniqueTarget<'a> = ChartedTarget<'a, PathState, UnitIntegrand, TechniqueChart<'a>>;
+
+/// The joint target of a chain over technique charts.
+pub type TechniqueJoint<'a> = Joint<'a, PathState, UnitIntegrand, TechniqueChart<'a>>;
+
+/// A move of a CMLT chain.
+pub type CmltMove<'a> = Box<dyn Proposal<CmltState> + Send + Sync + 'a>;
+
+/// The kernel of a CMLT chain.
+pub type CmltKernel<'a> = MetropolisHastings<&'a TechniqueJoint<'a>, Mixture<'a, CmltState>>;
 
 /// How chart swaps are made.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -90,12 +104,11 @@ pub struct CmltSettings {
     pub swap_every: f64,
     /// Probability of an inverse primary-space perturbation per mutation.
     pub ipsm: f64,
-    /// Probability of a path-space mutation per mutation (the identity chart).
+    /// Probability of a path-space mutation per mutation.
     pub pathspace: f64,
-    /// Mix of path-space mutations used when `pathspace > 0`.
-    pub probabilities: MutationProbabilities,
-    /// Their perturbation offsets.
-    pub perturbation: PerturbationSettings,
+    /// The path-space mutations used when `pathspace > 0` (their weights, offsets, mixture rule
+    /// and selection; length limit and importance are CMLT's).
+    pub mutations: Mutations,
     /// Uniform samples per technique chart in the pilot estimating technique energies.
     pub pilot: usize,
 }
@@ -113,54 +126,60 @@ impl Default for CmltSettings {
             swap_every: 16.0,
             ipsm: 0.0,
             pathspace: 0.0,
-            probabilities: MutationProbabilities::default(),
-            perturbation: PerturbationSettings::default(),
+            mutations: Mutations::new(8),
             pilot: 1000,
         }
     }
 }
 
-/// The CMLT integrator: settings, the swap proposal from the pilot, the path-space mutations.
+impl CmltSettings {
+    /// Mutation probabilities of the path-space moves (shorthand).
+    pub fn with_mutations(
+        mut self,
+        probabilities: MutationProbabilities,
+        perturbation: PerturbationSettings,
+    ) -> Self {
+        self.mutations.probabilities = probabilities;
+        self.mutations.perturbation = perturbation;
+        self
+    }
+}
+
+/// The CMLT integrator: settings and the swap proposal from the pilot.
 #[derive(Clone, Debug)]
 pub struct Cmlt {
     /// Settings.
     pub settings: CmltSettings,
     /// Swap proposal `q(s | k)`, index `[k − 1][s]`.
     pub swap_proposal: Vec<Vec<f64>>,
-    /// Path-space mutations (from the settings).
-    pub mutations: Mutations,
 }
 
-/// Move kinds, in statistics order.
+/// Move kinds, in statistics order (the path-space mutations follow).
 pub const KINDS: [&str; 4] = ["small step", "large step", "chart swap", "ipsm"];
-pub(super) const SMALL: usize = 0;
-pub(super) const LARGE: usize = 1;
 pub(super) const SWAP: usize = 2;
-pub(super) const IPSM: usize = 3;
-pub(super) const PATHSPACE: usize = 4;
 const PILOT: u64 = 0xC417;
 
 impl Cmlt {
     /// CMLT on `scene`: validates the settings and runs the pilot that estimates the energy of
     /// every technique (`settings.pilot` uniform samples per chart).
-    pub fn new(scene: &Scene, settings: CmltSettings) -> Result<Self> {
+    pub fn new(scene: &Scene, mut settings: CmltSettings) -> Result<Self> {
         let bad = |name: &str, reason: String| Error::InvalidParameter {
             name: name.into(),
             reason,
         };
+        settings
+            .small_step
+            .validate()
+            .map_err(|e| bad("small step", e.to_string()))?;
         let CmltSettings {
             max_edges,
             importance,
-            small_step,
             large_step,
             swap_every,
             ipsm,
             pathspace,
             ..
         } = settings;
-        small_step
-            .validate()
-            .map_err(|e| bad("small step", e.to_string()))?;
         if max_edges == 0 {
             return Err(bad(
                 "max depth",
@@ -188,15 +207,10 @@ impl Cmlt {
                 format!("must be 0 (no swaps) or at least 1, got {swap_every}"),
             ));
         }
-        let mutations = Mutations {
-            max_edges,
-            importance,
-            probabilities: settings.probabilities,
-            perturbation: settings.perturbation,
-        };
+        settings.mutations.max_edges = max_edges;
+        settings.mutations.importance = importance;
         if pathspace > 0.0 {
-            mutations.probabilities.validate()?;
-            mutations.perturbation.validate()?;
+            settings.mutations.validate()?;
         }
         let pilot = settings.pilot.max(1);
         let swap_proposal = (1..=max_edges)
@@ -239,243 +253,117 @@ impl Cmlt {
         Ok(Self {
             settings,
             swap_proposal,
-            mutations,
         })
     }
 
-    pub(super) fn chart<'a>(
-        &self,
-        scene: &'a Scene,
-        k: usize,
-        s: usize,
-    ) -> Option<TechniqueChart<'a>> {
+    /// The technique chart `s` of paths of `k` edges.
+    pub fn chart<'a>(&self, scene: &'a Scene, k: usize, s: usize) -> Option<TechniqueChart<'a>> {
         TechniqueChart::new(scene, k, s, self.settings.importance)
     }
 
-    /// Put `state` in chart `s` at its path: `u` from the exact inverse.
-    fn reparameterise(
-        &self,
-        scene: &Scene,
-        state: &mut CmltState,
-        s: usize,
-        rng: &mut ChainRng,
-    ) -> bool {
-        let Some(chart) = self.chart(scene, state.k, s) else {
-            return false;
-        };
-        state.u.resize(chart.dim(), 0.0);
-        if !chart.invert(&state.x, &mut state.u, rng) {
-            return false;
-        }
-        state.chart = s;
-        true
+    /// The technique charts of paths of `k` edges (`s = 0 … k`).
+    pub fn atlas<'a>(&self, scene: &'a Scene, k: usize) -> TechniqueAtlas<'a> {
+        Atlas::of((0..=k).filter_map(|s| self.chart(scene, k, s)).collect())
     }
 
-    /// Redraw `(s, u)` given the path: `s` by balance weight `p_s/Σp ∝ 1/I(C*_s)`, `u` by the
-    /// inverse.
-    fn refresh(&self, scene: &Scene, state: &mut CmltState, rng: &mut ChainRng) -> bool {
-        let weights: Vec<f64> = (0..=state.k).map(|s| state.x.balance_weight(s)).collect();
-        categorical(&weights, uniform(rng))
-            .is_some_and(|s| self.reparameterise(scene, state, s, rng))
+    /// The weighted targets over `atlas`.
+    pub fn target<'a>(atlas: &'a TechniqueAtlas<'a>) -> TechniqueTarget<'a> {
+        ChartedTarget::new(atlas, unit_integrand as UnitIntegrand, TargetKind::Weighted)
     }
 
-    /// After a move of the path from `x` to `y.x` that preserves the path marginal `f`: put
-    /// `(s, u)` at the new path. Serial tempering redraws the chart by balance weight (Gibbs, no
-    /// ratio). Under replica exchange the chain keeps its chart `chart`, whose path-space target
-    /// is `f w_chart`: the numbers come from the inverse and the returned log ratio
-    /// `ln w_chart(ȳ) − ln w_chart(x̄)` joins the acceptance. `None`: reject.
-    fn settle(
-        &self,
-        scene: &Scene,
-        y: &mut CmltState,
-        chart: usize,
-        x: &PathState,
-        rng: &mut ChainRng,
-    ) -> Option<f64> {
+    /// How the chart follows a move of the path.
+    fn refresh(&self, target: &TechniqueTarget<'_>) -> Refresh {
         match self.settings.swaps {
-            SwapKind::SerialTempering => self.refresh(scene, y, rng).then_some(0.0),
-            SwapKind::ReplicaExchange => {
-                let (wy, wx) = (y.x.balance_weight(chart), x.balance_weight(chart));
-                (wy > 0.0 && wx > 0.0 && self.reparameterise(scene, y, chart, rng))
-                    .then(|| wy.ln() - wx.ln())
-            }
+            SwapKind::SerialTempering => Refresh::Gibbs {
+                ln_weights: vec![0.0; target.atlas.levels()],
+            },
+            SwapKind::ReplicaExchange => Refresh::KeepChart,
         }
     }
 
-    fn ln_target(state: &CmltState) -> f64 {
-        let i = state.x.contribution.importance;
-        if i > 0.0 && i.is_finite() {
-            i.ln()
+    /// Probability of a serial-tempering chart swap per mutation.
+    fn swap_probability(&self) -> f64 {
+        let st = &self.settings;
+        if st.swap_every > 0.0 && st.swaps == SwapKind::SerialTempering {
+            1.0 / st.swap_every
         } else {
-            f64::NEG_INFINITY
+            0.0
         }
     }
 
-    /// One move of this kind (see the module docs); public so that schedules can be composed.
-    pub fn in_chart<O: Observer<CmltState>>(
+    /// The moves of a chain of paths of `k` edges, with their selection weights, in statistics
+    /// order: in-chart (small and large steps), chart swap, IPSM, path-space mutations. Public so
+    /// that tests can run them through the balance checks, or replace one.
+    pub fn moves<'a>(
         &self,
-        scene: &Scene,
-        chain: &mut Chain<CmltState>,
-        rng: &mut ChainRng,
-        observer: &mut O,
-    ) {
-        let large = uniform(rng) < self.settings.large_step;
-        let kind = if large { LARGE } else { SMALL };
-        let (k, s) = (chain.state.k, chain.state.chart);
-        let Some(chart) = self.chart(scene, k, s) else {
-            chain.fail(kind, Failure::NotApplicable, observer);
-            return;
+        scene: &'a Scene,
+        target: &'a TechniqueTarget<'a>,
+        k: usize,
+    ) -> Result<Vec<(f64, CmltMove<'a>)>> {
+        let st = &self.settings;
+        let bad = |e: mcmc_core::McmcError| Error::InvalidParameter {
+            name: "cmlt".into(),
+            reason: e.to_string(),
         };
-        let y = &mut chain.candidate;
-        y.k = k;
-        y.chart = s;
-        y.u.resize(chain.state.u.len(), 0.0);
-        for (b, &a) in y.u.iter_mut().zip(&chain.state.u) {
-            *b = if large {
-                uniform(rng)
-            } else {
-                self.settings.small_step.perturb(a, rng)
-            };
-        }
-        let ln = if chart.forward(&y.u, &mut y.x) {
-            Self::ln_target(y)
-        } else {
-            f64::NEG_INFINITY
-        };
-        chain.decide(ln, 0.0, kind, rng, observer);
-    }
-
-    /// One move of this kind (see the module docs); public so that schedules can be composed.
-    pub fn swap<O: Observer<CmltState>>(
-        &self,
-        scene: &Scene,
-        chain: &mut Chain<CmltState>,
-        rng: &mut ChainRng,
-        observer: &mut O,
-    ) {
-        let (k, i) = (chain.state.k, chain.state.chart);
-        let q = &self.swap_proposal[k - 1];
-        let j = categorical(q, uniform(rng)).unwrap_or(q.len() - 1);
-        let (pi, pj) = (
-            chain.state.x.strategy_importance(i),
-            chain.state.x.strategy_importance(j),
-        );
-        if !(pj > 0.0) {
-            // x̄ is outside the image of chart j: p_j(x̄) = 0, the swap is rejected.
-            chain.fail(SWAP, Failure::NotApplicable, observer);
-            return;
-        }
-        let (Some(from), Some(to)) = (self.chart(scene, k, i), self.chart(scene, k, j)) else {
-            chain.fail(SWAP, Failure::NotApplicable, observer);
-            return;
-        };
-        chain.candidate.clone_from(&chain.state);
-        let y = &mut chain.candidate;
-        y.u.resize(to.dim(), 0.0);
-        // Only the vertices whose numbers differ between the charts are inverted (§6.1).
-        if !to.reparameterise(&chain.state.x, &from, &chain.state.u, &mut y.u, rng) {
-            chain.fail(SWAP, Failure::Failed, observer);
-            return;
-        }
-        y.chart = j;
-        // p_j/p_i = I(C*_i)/I(C*_j); the target value is the same in both charts (eq. 17).
-        let ln_ratio = pi.ln() - pj.ln() + q[i].ln() - q[j].ln();
-        let ln = chain.ln_density;
-        chain.decide(ln, ln_ratio, SWAP, rng, observer);
-    }
-
-    /// One move of this kind (see the module docs); public so that schedules can be composed.
-    pub fn ipsm<O: Observer<CmltState>>(
-        &self,
-        scene: &Scene,
-        chain: &mut Chain<CmltState>,
-        rng: &mut ChainRng,
-        observer: &mut O,
-    ) {
-        let k = chain.state.k;
-        let j = ((uniform(rng) * (k + 1) as f64) as usize).min(k);
-        let x = &chain.state.x;
-        let ix = x.strategy_importance(j);
-        let Some(chart) = self.chart(scene, k, j) else {
-            chain.fail(IPSM, Failure::NotApplicable, observer);
-            return;
-        };
-        if !(ix > 0.0) {
-            chain.fail(IPSM, Failure::NotApplicable, observer);
-            return;
-        }
-        let mut u = vec![0.0; chart.dim()];
-        if !chart.invert(x, &mut u, rng) {
-            chain.fail(IPSM, Failure::Failed, observer);
-            return;
-        }
-        u.iter_mut()
-            .for_each(|v| *v = self.settings.small_step.perturb(*v, rng));
-        let y = &mut chain.candidate;
-        y.k = k;
-        if !chart.forward(&u, &mut y.x) {
-            let ln = f64::NEG_INFINITY;
-            chain.decide(ln, 0.0, IPSM, rng, observer);
-            return;
-        }
-        let iy = y.x.strategy_importance(j);
-        y.chart = j;
-        y.u = u;
-        let settled = if iy > 0.0 {
-            self.settle(scene, y, chain.state.chart, &chain.state.x, rng)
-        } else {
-            None
-        };
-        let Some(ln_w) = settled else {
-            chain.decide(f64::NEG_INFINITY, 0.0, IPSM, rng, observer);
-            return;
-        };
-        // Path marginal f: a = I(C*_j(ȳ))/I(C*_j(x̄)) (times w_s(ȳ)/w_s(x̄) when the chart is
-        // kept); the chain's own density follows ȳ.
-        let ln_y = Self::ln_target(y);
-        let ln_ratio = iy.ln() - ix.ln() + ln_w - (ln_y - chain.ln_density);
-        chain.decide(ln_y, ln_ratio, IPSM, rng, observer);
-    }
-
-    /// One move of this kind (see the module docs); public so that schedules can be composed.
-    pub fn path_space<O: Observer<CmltState>>(
-        &self,
-        scene: &Scene,
-        chain: &mut Chain<CmltState>,
-        rng: &mut ChainRng,
-        observer: &mut O,
-    ) {
-        let kind = self.mutations.probabilities.pick(rng);
-        let slot = PATHSPACE + kind as usize;
-        let k = chain.state.k;
-        // Chains keep their path length: the new-path mutation draws length k only.
-        let mut lengths = vec![0.0; self.settings.max_edges];
-        lengths[k - 1] = 1.0;
-        let np = NewPath {
-            length_probability: lengths,
-        };
-        let y = &mut chain.candidate;
-        match self
+        let small = || CubeWalk::new(st.small_step).map_err(bad);
+        let in_chart: Mixture<'a, Vec<f64>> = Mixture::new(
+            vec![
+                (1.0 - st.large_step, Box::new(small()?) as _),
+                (st.large_step, Box::new(Independence::new(UniformCube)) as _),
+            ],
+            MixtureRule::PerComponent,
+        )
+        .map_err(bad)?;
+        let p_swap = self.swap_probability();
+        let q = self
+            .swap_proposal
+            .get(k - 1)
+            .cloned()
+            .unwrap_or_else(|| vec![1.0; k + 1]);
+        let refresh = self.refresh(target);
+        let path_moves = st
             .mutations
-            .propose(scene, kind, &np, &chain.state.x, rng, &mut y.x)
-        {
-            Ok(r) => {
-                if y.x.path.edges() != k {
-                    chain.decide(f64::NEG_INFINITY, 0.0, slot, rng, observer);
-                    return;
-                }
-                y.k = k;
-                let Some(ln_w) = self.settle(scene, y, chain.state.chart, &chain.state.x, rng)
-                else {
-                    chain.decide(f64::NEG_INFINITY, 0.0, slot, rng, observer);
-                    return;
-                };
-                let ln_y = Self::ln_target(y);
-                let ln_ratio = r + ln_w - (ln_y - chain.ln_density);
-                chain.decide(ln_y, ln_ratio, slot, rng, observer);
-            }
-            Err(why) => chain.fail(slot, why, observer),
-        }
+            .proposal(scene, NewPath::only(k, st.max_edges))?;
+        let rest = 1.0 - p_swap;
+        Ok(vec![
+            (
+                rest * (1.0 - st.ipsm - st.pathspace),
+                Box::new(InChart::new(in_chart)),
+            ),
+            (
+                p_swap,
+                Box::new(ChartSwap::new(target, LevelProposal::Independent(q))),
+            ),
+            (
+                rest * st.ipsm,
+                Box::new(
+                    InversePerturbation::through_any_chart(target, small()?)
+                        .with_refresh(refresh.clone()),
+                ),
+            ),
+            (
+                rest * st.pathspace,
+                Box::new(PointMove::new(target, path_moves, refresh)),
+            ),
+        ])
+    }
+
+    /// The Metropolis–Hastings kernel of a chain of paths of `k` edges: the [`Joint`] target and
+    /// the mixture of [`Cmlt::moves`] (each move's own ratio).
+    pub fn kernel<'a>(
+        &self,
+        scene: &'a Scene,
+        target: &'a TechniqueTarget<'a>,
+        joint: &'a TechniqueJoint<'a>,
+        k: usize,
+    ) -> Result<CmltKernel<'a>> {
+        let mix = Mixture::new(self.moves(scene, target, k)?, MixtureRule::PerComponent).map_err(
+            |e| Error::InvalidParameter {
+                name: "cmlt".into(),
+                reason: e.to_string(),
+            },
+        )?;
+        Ok(MetropolisHastings::new(joint, mix))
     }
 }
 
@@ -486,31 +374,28 @@ impl Method for Cmlt {
         self.settings.max_edges
     }
 
-    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> CmltState {
+    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (CmltState, f64) {
         let k = g + 1;
         let mut rng = stream(seed, 0);
-        let s = ((uniform(&mut rng) * (k + 1) as f64) as usize).min(k);
-        let mut state = CmltState {
-            k,
-            chart: s,
-            ..Default::default()
-        };
-        let Some(chart) = self.chart(scene, k, s) else {
-            return state;
-        };
-        state.u = (0..chart.dim()).map(|_| uniform(&mut rng)).collect();
-        if chart.forward(&state.u, &mut state.x) {
-            // Bootstrap weight (k + 1) π_s(u): the chart was chosen with probability 1/(k + 1).
-            let c = &mut state.x.contribution;
-            c.importance *= (k + 1) as f64;
-            for (_, v) in &mut c.splats {
-                *v *= (k + 1) as f64;
-            }
-            state.bootstrap_scaled = true;
+        let s = uniform_index(uniform(&mut rng), k + 1);
+        let atlas = self.atlas(scene, k);
+        let target = Self::target(&atlas);
+        let u = (0..atlas.dim(s)).map(|_| uniform(&mut rng)).collect();
+        let mut state = CmltState::in_chart(s, u);
+        let ln = target.ln_density(s, &mut state);
+        // The chart was chosen with probability 1/(k + 1): bootstrap weight (k + 1) π_s(u).
+        let w = if ln.is_finite() {
+            (k + 1) as f64 * ln.exp()
         } else {
-            state.x = PathState::default();
-        }
-        state
+            0.0
+        };
+        (state, w)
+    }
+
+    fn ln_density(&self, scene: &Scene, state: &CmltState) -> f64 {
+        let atlas = self.atlas(scene, state.x.path.edges());
+        let target = Self::target(&atlas);
+        Joint::new(&target).ln_density(state)
     }
 
     fn mutate<O: Observer<CmltState>>(
@@ -521,36 +406,16 @@ impl Method for Cmlt {
         rng: &mut ChainRng,
         observer: &mut O,
     ) {
-        // The chain's density is π_s(u), without the bootstrap's factor k + 1.
-        let state = &mut chain.state;
-        if state.bootstrap_scaled {
-            let f = 1.0 / (state.k + 1) as f64;
-            let c = &mut state.x.contribution;
-            c.importance *= f;
-            for (_, v) in &mut c.splats {
-                *v *= f;
-            }
-            state.bootstrap_scaled = false;
-        }
-        chain.ln_density = Self::ln_target(&chain.state);
-        let st = &self.settings;
-        // Replica exchange happens between chains, in `exchange` (below).
-        let p_swap = if st.swap_every > 0.0 && st.swaps == SwapKind::SerialTempering {
-            1.0 / st.swap_every
-        } else {
-            0.0
+        let k = chain.state.x.path.edges();
+        let atlas = self.atlas(scene, k);
+        let target = Self::target(&atlas);
+        let joint = Joint::new(&target);
+        // Validated in `new`: building the moves cannot fail.
+        let Ok(mut kernel) = self.kernel(scene, &target, &joint, k) else {
+            return;
         };
         for _ in 0..n {
-            let v = uniform(rng);
-            if v < p_swap {
-                self.swap(scene, chain, rng, observer);
-            } else if v < p_swap + (1.0 - p_swap) * st.ipsm {
-                self.ipsm(scene, chain, rng, observer);
-            } else if v < p_swap + (1.0 - p_swap) * (st.ipsm + st.pathspace) {
-                self.path_space(scene, chain, rng, observer);
-            } else {
-                self.in_chart(scene, chain, rng, observer);
-            }
+            kernel.step(chain, rng, observer);
         }
     }
 
@@ -560,8 +425,14 @@ impl Method for Cmlt {
             .then(|| st.swap_every.round().max(1.0) as u64)
     }
 
-    fn exchange(&self, scene: &Scene, chains: &mut [Chain<CmltState>], rng: &mut ChainRng) {
-        self.exchange_round(scene, chains, rng);
+    fn exchange(
+        &self,
+        scene: &Scene,
+        chains: &mut [Chain<CmltState>],
+        groups: &[usize],
+        rng: &mut ChainRng,
+    ) {
+        self.exchange_round(scene, chains, groups, rng);
     }
 
     fn kinds(&self) -> Vec<String> {
@@ -572,9 +443,9 @@ impl Method for Cmlt {
                 _ => s.to_string(),
             })
             .chain(
-                MutationKind::ALL
-                    .iter()
-                    .map(|k| format!("path: {}", k.name())),
+                crate::pathspace::mutations::names()
+                    .into_iter()
+                    .map(|k| format!("path: {k}")),
             )
             .collect()
     }

@@ -5,7 +5,10 @@ pub mod integrator;
 pub mod replica;
 pub mod technique;
 
-pub use integrator::{Cmlt, CmltSettings, CmltState, SwapKind};
+pub use integrator::{
+    Cmlt, CmltKernel, CmltMove, CmltSettings, CmltState, SwapKind, TechniqueAtlas, TechniqueJoint,
+    TechniqueTarget, UnitIntegrand,
+};
 pub use technique::{
     TechniqueChart, camera_numbers, light_numbers, technique_charts, unit_integrand,
 };

@@ -7,15 +7,11 @@
 //! with probability `b_s / b_k`, so the population already carries each technique's share of the
 //! image and no per-technique normalisation is needed.
 //!
-//! An exchange round pairs chains of the same path length in different charts `i ≠ j`, at paths
-//! `x̄₁` and `x̄₂`, and proposes that chain `i` take `x̄₂` with numbers `u ~ κ_i(·|x̄₂)` while chain
-//! `j` takes `x̄₁` with `u ~ κ_j(·|x̄₁)` (only the vertices whose numbers differ are inverted,
-//! §6.1). On the product of the chains' targets the proposal is a Gibbs draw of the numbers after
-//! exchanging the paths, so it is accepted with
-//! `min(1, p_i(x̄₂) p_j(x̄₁) / (p_i(x̄₁) p_j(x̄₂)))` (eq. 24) — the importances `π` are equal in
-//! every chart at the same path (eq. 23), and `f` is never evaluated. In terms of the stored
-//! strategy importances `p_s ∝ 1 / I(C*_s)`, the ratio is
-//! `I(C*_i(x̄₁)) I(C*_j(x̄₂)) / (I(C*_i(x̄₂)) I(C*_j(x̄₁)))`.
+//! An exchange round pairs chains of the same path length in different charts `i ≠ j` and
+//! proposes that they exchange paths, through `mcmc_charts`' [`exchange`]: accepted with
+//! `min(1, p_i(x̄₂) p_j(x̄₁) / (p_i(x̄₁) p_j(x̄₂)))` (eq. 24; the importances `π` are equal in every
+//! chart at the same path, eq. 23, and `f` is never evaluated), the numbers drawn afterwards by
+//! the charts' partial inverse (§6.1) — they are Gibbs draws and do not enter the acceptance.
 //!
 //! The pairing is a function of the chains' charts (which never change) and of fresh random
 //! numbers only, never of the paths, so each pair's exchange preserves the product law. Chains of
@@ -27,33 +23,24 @@
 use super::Cmlt;
 use super::integrator::{CmltState, SWAP, SwapKind};
 use crate::scene::Scene;
-use mcmc_charts::Chart;
-use mcmc_core::kernel::acceptance;
+use mcmc_charts::moves::{Exchange, exchange};
 use mcmc_core::rng::{substream, uniform};
-use mcmc_core::{Chain, ChainRng, Failure};
+use mcmc_core::{Chain, ChainRng, Failure, Family};
 use rand::Rng;
 use rayon::prelude::*;
 
-/// What an exchange proposal between chains `a` and `b` came to.
-enum Outcome {
-    /// Accepted with this probability: the numbers of `b`'s path in `a`'s chart and of `a`'s
-    /// path in `b`'s chart.
-    Accepted(f64, Vec<f64>, Vec<f64>),
-    /// Rejected with this acceptance probability.
-    Rejected(f64),
-    /// A path lies outside the other chart's image (probability 0).
-    NotApplicable,
-    /// An inversion failed.
-    Failed,
-}
-
 impl Cmlt {
-    /// Pairs of chains (indices into `chains`) for one exchange round: same path length,
-    /// preferably different charts. Depends on the charts and `rng` only.
-    pub fn exchange_pairs(chains: &[Chain<CmltState>], rng: &mut ChainRng) -> Vec<(usize, usize)> {
+    /// Pairs of chains (indices into `chains`) for one exchange round: same group (path length;
+    /// `groups[c]` for chain `c`), preferably different charts. Depends on the groups, the charts
+    /// and `rng` only.
+    pub fn exchange_pairs(
+        chains: &[Chain<CmltState>],
+        groups: &[usize],
+        rng: &mut ChainRng,
+    ) -> Vec<(usize, usize)> {
         let mut by_length: Vec<Vec<(usize, f64, usize)>> = Vec::new();
         for (c, chain) in chains.iter().enumerate() {
-            let k = chain.state.k;
+            let k = groups[c];
             if by_length.len() <= k {
                 by_length.resize_with(k + 1, Vec::new);
             }
@@ -73,38 +60,21 @@ impl Cmlt {
         pairs
     }
 
-    /// The exchange proposal between two chains (read only; see the module docs).
+    /// The exchange proposal between two chains (read only).
     fn exchange_proposal(
         &self,
         scene: &Scene,
         a: &CmltState,
         b: &CmltState,
         rng: &mut ChainRng,
-    ) -> Outcome {
-        let (i, j, k) = (a.chart, b.chart, a.k);
-        let (x1, x2) = (&a.x, &b.x);
-        let ln = |v: f64| if v > 0.0 { v.ln() } else { f64::NAN };
-        let ln_ratio = ln(x1.strategy_importance(i)) + ln(x2.strategy_importance(j))
-            - ln(x2.strategy_importance(i))
-            - ln(x1.strategy_importance(j));
-        if ln_ratio.is_nan() || a.bootstrap_scaled || b.bootstrap_scaled || b.k != k {
-            return Outcome::NotApplicable;
+    ) -> Exchange {
+        let k = a.x.path.edges();
+        if b.x.path.edges() != k {
+            return Exchange::NotApplicable;
         }
-        let (Some(ci), Some(cj)) = (self.chart(scene, k, i), self.chart(scene, k, j)) else {
-            return Outcome::NotApplicable;
-        };
-        let (p, _) = acceptance(0.0, 0.0, ln_ratio);
-        if !(uniform(rng) < p) {
-            // The numbers are drawn only for an accepted exchange: they do not enter `p`.
-            return Outcome::Rejected(p);
-        }
-        let (mut ua, mut ub) = (vec![0.0; ci.dim()], vec![0.0; cj.dim()]);
-        if !ci.reparameterise(x2, &cj, &b.u, &mut ua, rng)
-            || !cj.reparameterise(x1, &ci, &a.u, &mut ub, rng)
-        {
-            return Outcome::Failed;
-        }
-        Outcome::Accepted(p, ua, ub)
+        let atlas = self.atlas(scene, k);
+        let target = Self::target(&atlas);
+        exchange(&target, a, b, rng)
     }
 
     /// One replica-exchange round over all chains (see the module docs); the proposals are made
@@ -114,14 +84,15 @@ impl Cmlt {
         &self,
         scene: &Scene,
         chains: &mut [Chain<CmltState>],
+        groups: &[usize],
         rng: &mut ChainRng,
     ) {
         if self.settings.swaps != SwapKind::ReplicaExchange {
             return;
         }
-        let pairs = Self::exchange_pairs(chains, rng);
+        let pairs = Self::exchange_pairs(chains, groups, rng);
         let key = rng.next_u64();
-        let outcomes: Vec<Outcome> = pairs
+        let outcomes: Vec<Exchange> = pairs
             .par_iter()
             .enumerate()
             .map(|(n, &(a, b))| {
@@ -130,24 +101,26 @@ impl Cmlt {
             })
             .collect();
         for ((a, b), outcome) in pairs.into_iter().zip(outcomes) {
-            let stats = &mut chains[a].stats;
+            let (lo, hi) = chains.split_at_mut(a.max(b));
+            let (ca, cb) = if a < b {
+                (&mut lo[a], &mut hi[0])
+            } else {
+                (&mut hi[0], &mut lo[b])
+            };
             match outcome {
-                Outcome::Accepted(p, ua, ub) => {
-                    stats.record(SWAP, p, true, false);
-                    let (lo, hi) = chains.split_at_mut(a.max(b));
-                    let (ca, cb) = if a < b {
-                        (&mut lo[a], &mut hi[0])
-                    } else {
-                        (&mut hi[0], &mut lo[b])
-                    };
-                    std::mem::swap(&mut ca.state.x, &mut cb.state.x);
-                    std::mem::swap(&mut ca.ln_density, &mut cb.ln_density);
-                    ca.state.u = ua;
-                    cb.state.u = ub;
+                Exchange::Accepted(p, ..) => {
+                    ca.stats.record(SWAP, p, true, false);
+                    outcome.apply(&mut ca.state, &mut cb.state);
+                    // Each chain's density at its new state, as its kernel evaluates it.
+                    for c in [ca, cb] {
+                        let atlas = self.atlas(scene, c.state.x.path.edges());
+                        let target = Self::target(&atlas);
+                        c.ln_density = target.ln_density(c.state.chart, &mut c.state);
+                    }
                 }
-                Outcome::Rejected(p) => stats.record(SWAP, p, false, false),
-                Outcome::NotApplicable => stats.record_failure(SWAP, Failure::NotApplicable),
-                Outcome::Failed => stats.record_failure(SWAP, Failure::Failed),
+                Exchange::Rejected(p) => ca.stats.record(SWAP, p, false, false),
+                Exchange::NotApplicable => ca.stats.record_failure(SWAP, Failure::NotApplicable),
+                Exchange::Failed => ca.stats.record_failure(SWAP, Failure::Failed),
             }
         }
     }

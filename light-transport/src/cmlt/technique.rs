@@ -20,16 +20,17 @@
 use crate::metropolis::ImportanceKind;
 use crate::path::{Vertex, VertexKind};
 use crate::pathspace::PathState;
-use crate::pathspace::bidirectional::sample_path;
+use crate::pathspace::walk::sample_path;
 use crate::sampler::{CAMERA_BLOCK, LIGHT_BLOCK, ReplayStream, VERTEX_BLOCK};
 use crate::scene::Scene;
 use mcmc_charts::Chart;
 use mcmc_core::ChainRng;
 use mcmc_core::rng::uniform;
 
-/// The integrand relative to the measure `I(f) dμ` the technique charts report densities in.
-pub fn unit_integrand(_x: &PathState) -> f64 {
-    1.0
+/// The integrand relative to the measure `I(f) dμ` the technique charts report densities in: 1
+/// on paths that carry light.
+pub fn unit_integrand(x: &PathState) -> f64 {
+    if x.carries_light() { 1.0 } else { 0.0 }
 }
 
 /// The chart of strategy `s` (light vertices) for paths of `k` edges.
@@ -73,32 +74,6 @@ impl<'a> TechniqueChart<'a> {
     /// Camera vertices `t`.
     pub fn t(&self) -> usize {
         self.k + 1 - self.s
-    }
-
-    /// The numbers `u` of path `x` in this chart, given its numbers `u_from` in chart `from` (same
-    /// path length): only the vertices whose numbers differ between the two charts are inverted
-    /// (charted-MLT paper §6.1); the others keep their numbers, whose conditional law given `x` is
-    /// the same in both charts, so `u` has the law of [`Chart::invert`] when `u_from` has the law
-    /// of `from`'s inverse.
-    pub fn reparameterise(
-        &self,
-        x: &PathState,
-        from: &TechniqueChart<'_>,
-        u_from: &[f64],
-        u: &mut [f64],
-        rng: &mut ChainRng,
-    ) -> bool {
-        if from.k != self.k
-            || u_from.len() < from.dim()
-            || u.len() < self.dim()
-            || !(self.ln_density(x) > f64::NEG_INFINITY)
-        {
-            return false;
-        }
-        let (nc_old, nc) = (camera_numbers(from.t()), camera_numbers(self.t()));
-        let (cam, light) = u.split_at_mut(nc);
-        self.invert_camera(x, cam, rng, Some((from.t(), &u_from[..nc_old])))
-            && self.invert_light(x, light, rng, Some((from.s, &u_from[nc_old..])))
     }
 
     /// Write the numbers of the scattering vertex `v` (reached from `prev`, leaving toward
@@ -287,6 +262,32 @@ impl Chart<PathState> for TechniqueChart<'_> {
         let nc = camera_numbers(self.t());
         let (cam, light) = u.split_at_mut(nc);
         self.invert_camera(x, cam, rng, None) && self.invert_light(x, light, rng, None)
+    }
+
+    /// The numbers `u` of path `x` in this chart, given its numbers `u_from` in chart `from` (same
+    /// path length): only the vertices whose numbers differ between the two charts are inverted
+    /// (charted-MLT paper §6.1); the others keep their numbers, whose conditional law given `x` is
+    /// the same in both charts, so `u` has the law of [`Chart::invert`] when `u_from` has the law
+    /// of `from`'s inverse.
+    fn partial_inverse(
+        &self,
+        x: &PathState,
+        from: &Self,
+        u_from: &[f64],
+        u: &mut [f64],
+        rng: &mut ChainRng,
+    ) -> bool {
+        if from.k != self.k
+            || u_from.len() < from.dim()
+            || u.len() < self.dim()
+            || !(self.ln_density(x) > f64::NEG_INFINITY)
+        {
+            return false;
+        }
+        let (nc_old, nc) = (camera_numbers(from.t()), camera_numbers(self.t()));
+        let (cam, light) = u.split_at_mut(nc);
+        self.invert_camera(x, cam, rng, Some((from.t(), &u_from[..nc_old])))
+            && self.invert_light(x, light, rng, Some((from.s, &u_from[nc_old..])))
     }
 
     fn name(&self) -> String {

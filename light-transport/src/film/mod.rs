@@ -18,6 +18,9 @@ pub use output::{read_image, srgb_encode, write_bytes_png, write_exr, write_png}
 
 use crate::spectrum::Rgb;
 
+/// A splat: raster position (pixels from the left and top edges) and value.
+pub type Splat = ([f64; 2], Rgb);
+
 /// An image under accumulation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {

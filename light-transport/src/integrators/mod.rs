@@ -21,6 +21,9 @@ pub use bdpt::Bdpt;
 pub use lt::LightTracer;
 pub use pt::PathTracer;
 
+pub use crate::budget::Budget;
+pub use crate::film::Splat;
+
 use crate::film::Film;
 use crate::sampler::IndependentStream;
 use crate::scene::Scene;
@@ -28,9 +31,6 @@ use crate::spectrum::Rgb;
 use mcmc_core::rng::uniform;
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
-
-/// A splat: raster position and value.
-pub type Splat = ([f64; 2], Rgb);
 
 /// One sample of an unbiased estimator.
 pub trait Estimator: Sync {
@@ -50,16 +50,6 @@ pub trait Estimator: Sync {
     }
     /// Whether splats are made (they are normalised by the number of passes).
     fn splats(&self) -> bool;
-}
-
-/// How long to render.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Budget {
-    /// A number of samples per pixel.
-    SamplesPerPixel(u64),
-    /// Wall-clock time (at least one whole pass; the last pass may be fractional, see the module
-    /// docs).
-    Time(Duration),
 }
 
 /// Progress after each pass.
@@ -113,7 +103,7 @@ pub fn render<E: Estimator>(
     let start = Instant::now();
     let mut stats = RenderStats::default();
     let planned = match budget {
-        Budget::SamplesPerPixel(n) => Some(n.max(1)),
+        Budget::SamplesPerPixel(n) => Some((n.ceil() as u64).max(1)),
         Budget::Time(_) => None,
     };
     let mut last_pass: Option<Duration> = None;
@@ -124,6 +114,8 @@ pub fn render<E: Estimator>(
             (Budget::Time(t), Some(d)) if !d.is_zero() => {
                 (t.saturating_sub(start.elapsed()).as_secs_f64() / d.as_secs_f64()).min(1.0)
             }
+            // A fractional sample count ends with the fraction of a pass it asks for.
+            (Budget::SamplesPerPixel(n), _) => (n - stats.passes as f64).clamp(0.0, 1.0),
             _ => 1.0,
         };
         let pass_start = Instant::now();
@@ -151,7 +143,7 @@ pub fn render<E: Estimator>(
             },
         );
         let done = match budget {
-            Budget::SamplesPerPixel(n) => stats.passes >= n.max(1),
+            Budget::SamplesPerPixel(_) => planned.is_some_and(|p| stats.passes >= p),
             Budget::Time(t) => q < 1.0 || elapsed >= t,
         };
         if done || !go_on {
@@ -225,15 +217,4 @@ pub fn pass<E: Estimator>(
         film.splat_scale += q;
     }
     taken
-}
-
-/// Film `[0,1)²` position of a sample in `pixel`: uniform within the pixel.
-#[inline]
-pub fn film_position(scene: &Scene, pixel: usize, jitter: [f64; 2]) -> [f64; 2] {
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let (x, y) = (pixel % w, pixel / w);
-    [
-        crate::math::clamp_unit((x as f64 + jitter[0]) / w as f64),
-        crate::math::clamp_unit((y as f64 + jitter[1]) / h as f64),
-    ]
 }

@@ -24,6 +24,18 @@ pub struct PathTracer {
     pub roulette_after: Option<usize>,
 }
 
+impl Default for PathTracer {
+    /// Paths of up to 9 edges (pbrt's default `maxdepth` 8), power heuristic, no Russian
+    /// roulette.
+    fn default() -> Self {
+        Self {
+            max_edges: 9,
+            heuristic: MisHeuristic::Power,
+            roulette_after: None,
+        }
+    }
+}
+
 fn mis(a: f64, b: f64, h: MisHeuristic) -> f64 {
     match h {
         MisHeuristic::Balance => a / (a + b),
@@ -40,7 +52,7 @@ impl Estimator for PathTracer {
         _splats: &mut Vec<Splat>,
     ) -> Rgb {
         stream.start_stream(CAMERA_STREAM);
-        let film = super::film_position(scene, pixel, stream.next_2d());
+        let film = scene.camera.film_position(pixel, stream.next_2d());
         let lens = stream.next_2d();
         let cs = scene.camera.sample_ray(film, lens);
         if cs.we == 0.0 {

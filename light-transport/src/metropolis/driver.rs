@@ -5,32 +5,18 @@
 //! master seed; chains are processed in fixed groups whose splats are applied to the film in group
 //! order after every round, so the image is identical for any thread count.
 
+use super::record::{ExpectedValue, Recordable, Sink};
+use crate::budget::Budget;
 use crate::film::Film;
 use crate::scene::Scene;
-use crate::spectrum::Rgb;
 use crate::{Error, Result};
 use mcmc_core::kernel::Observer;
 use mcmc_core::population::systematic_resample;
 use mcmc_core::rng::substream;
 use mcmc_core::{Chain, ChainRng, Stats};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-
-/// What a state contributes: splats (raster position, colour) and the scalar importance `I` the
-/// chain samples (a function of the splats, see [`super::ImportanceKind`]).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Contribution {
-    /// Raster positions and colours.
-    pub splats: Vec<([f64; 2], Rgb)>,
-    /// The scalar importance (≥ 0).
-    pub importance: f64,
-}
-
-/// A chain state that knows its contribution.
-pub trait Recordable {
-    /// The contribution of the state as last evaluated.
-    fn contribution(&self) -> &Contribution;
-}
 
 /// A Metropolis method the driver can run.
 pub trait Method: Sync {
@@ -38,9 +24,13 @@ pub trait Method: Sync {
     type State: Clone + Send + Recordable;
     /// Number of independent groups (e.g. path lengths); chains never leave their group.
     fn groups(&self) -> usize;
-    /// An independent sample of group `g` from stream key `seed`, evaluated. Must be a deterministic
-    /// function of `(g, seed)`: the driver replays seeds this way and checks the importance.
-    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> Self::State;
+    /// An independent sample of group `g` from stream key `seed`, evaluated, with its importance
+    /// weight `I / q` (0 when it carries nothing). Must be a deterministic function of
+    /// `(g, seed)`: the driver replays seeds this way and checks the weight.
+    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (Self::State, f64);
+    /// `ln π(state)`: the log density of the chain's target at a state, as the kernel of
+    /// [`Method::mutate`] evaluates it (chains start with it).
+    fn ln_density(&self, scene: &Scene, state: &Self::State) -> f64;
     /// Run `n` mutations of `chain`, reporting every proposal to `observer`.
     fn mutate<O: Observer<Self::State>>(
         &self,
@@ -63,18 +53,17 @@ pub trait Method: Sync {
     /// Moves between chains (e.g. replica exchange), called between sub-rounds of
     /// [`Method::exchange_every`] mutations. They must leave the product of the chains'
     /// stationary laws invariant and may depend on `rng` only for their randomness (determinism).
-    /// The driver does not record them on the film: each chain records its own mutations, so the
-    /// number of exchanges a chain takes part in does not weigh its samples.
-    fn exchange(&self, _scene: &Scene, _chains: &mut [Chain<Self::State>], _rng: &mut ChainRng) {}
-}
-
-/// How long to run the chains.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Budget {
-    /// Total mutations = this × number of pixels.
-    MutationsPerPixel(f64),
-    /// Wall-clock time for the chains (whole rounds; the bootstrap is extra).
-    Time(Duration),
+    /// `groups[c]` is the group of chain `c` (fixed for the whole run). The driver does not record
+    /// exchanges: each chain records its own mutations, so the number of exchanges a chain takes
+    /// part in does not weigh its samples.
+    fn exchange(
+        &self,
+        _scene: &Scene,
+        _chains: &mut [Chain<Self::State>],
+        _groups: &[usize],
+        _rng: &mut ChainRng,
+    ) {
+    }
 }
 
 /// How chains are seeded from the bootstrap population.
@@ -95,7 +84,7 @@ pub struct MetropolisSettings {
     pub chains: usize,
     /// Bootstrap samples per group.
     pub bootstrap: usize,
-    /// Chain budget.
+    /// Chain budget (samples per pixel: mutations per pixel).
     pub budget: Budget,
     /// Master seed.
     pub seed: u64,
@@ -108,7 +97,7 @@ impl Default for MetropolisSettings {
         Self {
             chains: 1000,
             bootstrap: 100_000,
-            budget: Budget::MutationsPerPixel(16.0),
+            budget: Budget::SamplesPerPixel(16.0),
             seed: 1,
             seeding: Seeding::Resample,
         }
@@ -142,14 +131,62 @@ pub struct MetropolisStats {
     pub chain_time: Duration,
     /// Rays traced.
     pub rays: u64,
+    /// Whether the render stopped early on request (an interrupt): the film holds the mutations
+    /// actually made.
+    pub interrupted: bool,
 }
 
-/// A splat: raster position and colour.
-type Splat = ([f64; 2], Rgb);
+impl MetropolisStats {
+    /// The statistics for people, one line each: bootstrap, chains per path length, chain
+    /// throughput, and the acceptance table per move kind (`pixels`: of the image).
+    pub fn summary(&self, pixels: f64) -> Vec<String> {
+        let mut out = vec![format!(
+            "bootstrap  {:.2} s, normalisation b = {:.5e} ({} of the samples carry light{}), seeding {:.2} s",
+            self.bootstrap_time.as_secs_f64(),
+            self.normalisation,
+            self.bootstrap_nonzero,
+            if self.bootstrap_discarded > 0 {
+                format!(", {} non-finite discarded", self.bootstrap_discarded)
+            } else {
+                String::new()
+            },
+            self.seed_time.as_secs_f64()
+        )];
+        if self.group_chains.len() > 1 {
+            let groups: Vec<String> = self
+                .group_chains
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| **c > 0)
+                .map(|(g, c)| format!("k={}:{c}", g + 1))
+                .collect();
+            out.push(format!("chains     per path length {}", groups.join(" ")));
+        }
+        let secs = self.chain_time.as_secs_f64().max(1e-9);
+        out.push(format!(
+            "chains     {:.2} s, {} mutations ({:.1} per pixel), {:.2} M mutations/s, {:.2} M rays/s",
+            secs,
+            self.mutations,
+            self.mutations as f64 / pixels,
+            self.mutations as f64 / secs / 1e6,
+            self.rays as f64 / secs / 1e6
+        ));
+        out.extend(
+            self.stats
+                .table(&self.kinds)
+                .to_string()
+                .lines()
+                .map(str::to_string),
+        );
+        out
+    }
+}
 
 const BOOTSTRAP: u64 = 0xB007;
 const CHAINS: u64 = 0xC4A1;
 const SPLIT: usize = 16;
+/// Most slices a round is cut into (the granularity of an interrupt).
+const SLICES: u64 = 8;
 const EXCHANGE: u64 = 0xE8C4;
 
 fn key(seed: u64, g: usize, i: usize) -> u64 {
@@ -163,53 +200,39 @@ fn key(seed: u64, g: usize, i: usize) -> u64 {
     z ^ (z >> 31)
 }
 
-/// The expected-value recorder: every proposal deposits `a` times the candidate's splats and
-/// `1 − a` times the current state's, each scaled by `b / I` (so a chain whose states have density
-/// `I / b` deposits the image). Energy redistribution uses it with `b` = its energy quantum.
-pub struct SplatRecorder<'a> {
-    /// Where splats go.
-    pub splats: &'a mut Vec<([f64; 2], Rgb)>,
-    /// The normalisation.
-    pub b: f64,
-}
-
-impl SplatRecorder<'_> {
-    /// Deposit `w` times the state's splats, scaled by `b / I`.
-    #[inline]
-    pub fn record<S: Recordable>(&mut self, s: &S, w: f64) {
-        let c = s.contribution();
-        if w <= 0.0 || !(c.importance > 0.0) || !c.importance.is_finite() {
-            return;
-        }
-        let scale = w * self.b / c.importance;
-        for &(r, v) in &c.splats {
-            self.splats.push((r, v * scale));
-        }
-    }
-}
-
-impl<S: Recordable> Observer<S> for SplatRecorder<'_> {
-    #[inline]
-    fn observe(&mut self, current: &S, proposed: &S, a: f64, _kind: usize) {
-        self.record(current, 1.0 - a);
-        self.record(proposed, a);
-    }
-}
-
-/// Run `method` on `scene`. `progress(film, mutations done, elapsed)` is called after every round
-/// and may stop the chains by returning `false`.
+/// Run `method` on `scene` into a film. `progress(film, mutations done, elapsed)` is called
+/// after every round and may stop the chains by returning `false`.
 pub fn run<M: Method>(
     scene: &Scene,
     method: &M,
     settings: &MetropolisSettings,
-    mut progress: impl FnMut(&Film, u64, Duration) -> bool,
+    progress: impl FnMut(&Film, u64, Duration) -> bool,
 ) -> Result<(Film, MetropolisStats)> {
+    let mut film = Film::new(scene.camera.width, scene.camera.height);
+    let stats = run_with(scene, method, settings, &mut film, None, progress)?;
+    Ok((film, stats))
+}
+
+/// Run `method` on `scene`, recording into `sink`. `progress(sink, mutations done, elapsed)` is
+/// called after every round and may stop the chains by returning `false`; `stop`, when set (by a
+/// signal handler, say), stops them at the next slice of a round, every chain having made the
+/// same number of mutations, so the sink holds an unbiased estimate of what was done.
+pub fn run_with<M: Method, K: Sink<M::State>>(
+    scene: &Scene,
+    method: &M,
+    settings: &MetropolisSettings,
+    sink: &mut K,
+    stop: Option<&AtomicBool>,
+    mut progress: impl FnMut(&K, u64, Duration) -> bool,
+) -> Result<MetropolisStats> {
     if settings.chains == 0 || settings.bootstrap == 0 {
         return Err(Error::InvalidParameter {
             name: "chains/bootstrap".into(),
             reason: "need at least one chain and one bootstrap sample".into(),
         });
     }
+    settings.budget.validate()?;
+    let stopped = || stop.is_some_and(|s| s.load(Ordering::Relaxed));
     let (w, h) = (scene.camera.width, scene.camera.height);
     let pixels = (w * h) as f64;
     let groups = method.groups().max(1);
@@ -225,10 +248,7 @@ pub fn run<M: Method>(
         .into_par_iter()
         .map(|j| {
             let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
-            method
-                .independent(scene, g, key(settings.seed, g, i))
-                .contribution()
-                .importance
+            method.independent(scene, g, key(settings.seed, g, i)).1
         })
         .collect();
     for wgt in &mut weights {
@@ -271,28 +291,30 @@ pub fn run<M: Method>(
         .par_iter()
         .map(|&j| {
             let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
-            let s = method.independent(scene, g, key(settings.seed, g, i));
-            let imp = s.contribution().importance;
-            if (imp - weights[j]).abs() > 1e-9 * weights[j].abs().max(1e-300) {
-                return Err(Error::InvalidScene(format!("replay of bootstrap path {i} (group {g}) gave importance {imp}, the bootstrap saw {}: the sampler is not a deterministic function of its numbers", weights[j])));
+            let (s, wgt) = method.independent(scene, g, key(settings.seed, g, i));
+            if (wgt - weights[j]).abs() > 1e-9 * weights[j].abs().max(1e-300) {
+                return Err(Error::InvalidScene(format!("replay of bootstrap path {i} (group {g}) gave importance {wgt}, the bootstrap saw {}: the sampler is not a deterministic function of its numbers", weights[j])));
             }
-            Chain::with_density(s, imp.ln()).map_err(|e| Error::InvalidScene(e.to_string()))
+            let l = method.ln_density(scene, &s);
+            Chain::with_density(s, l).map_err(|e| Error::InvalidScene(e.to_string()))
         })
         .collect();
     let mut chains = Vec::with_capacity(picks.len());
+    let mut chain_groups = Vec::with_capacity(picks.len());
     for (c, &j) in seeded.into_iter().zip(&picks) {
         chains.push(c?);
+        chain_groups.push(j / settings.bootstrap);
         stats.group_chains[j / settings.bootstrap] += 1;
     }
     let mut rngs: Vec<ChainRng> = (0..chains.len())
         .map(|c| substream(settings.seed, CHAINS, c as u64))
         .collect();
     stats.seed_time = t.elapsed();
-    // 3. Chains in rounds.
+    // 3. Chains in rounds; a round is made of slices (at most SLICES, and cut at every exchange),
+    //    so an interrupt stops within a fraction of a round.
     let t = Instant::now();
-    let mut film = Film::new(w, h);
     let total = match settings.budget {
-        Budget::MutationsPerPixel(m) => Some((m * pixels).max(1.0) as u64),
+        Budget::SamplesPerPixel(m) => Some((m * pixels).max(1.0) as u64),
         Budget::Time(_) => None,
     };
     let nchains = chains.len() as u64;
@@ -313,44 +335,55 @@ pub fn run<M: Method>(
             None => per_round,
         };
         let round_start = Instant::now();
-        let mut outputs: Vec<(Vec<Splat>, u64)> =
-            vec![Default::default(); chains.len().div_ceil(size)];
+        let mut outputs: Vec<(K::Chunk, u64)> = (0..chains.len().div_ceil(size))
+            .map(|_| Default::default())
+            .collect();
+        let slice = k.div_ceil(SLICES).max(1);
         let mut left = k;
+        let mut since_exchange = 0;
         while left > 0 {
-            let step = exchange_every.map_or(left, |e| e.clamp(1, left));
+            let mut step = slice.min(left);
+            if let Some(e) = exchange_every {
+                step = step.min(e.max(1) - since_exchange).max(1);
+            }
             chains
                 .par_chunks_mut(size)
                 .zip(rngs.par_chunks_mut(size))
                 .zip(outputs.par_iter_mut())
-                .for_each(|((cs, rs), (splats, rays))| {
+                .for_each(|((cs, rs), (chunk, rays))| {
                     crate::accel::take_ray_count();
-                    let mut rec = SplatRecorder { splats, b };
+                    let mut rec = ExpectedValue { recorder: chunk, b };
                     for (chain, rng) in cs.iter_mut().zip(rs.iter_mut()) {
                         method.mutate(scene, chain, step, rng, &mut rec);
                     }
                     *rays += crate::accel::take_ray_count();
                 });
             left -= step;
-            if exchange_every.is_some() {
-                method.exchange(scene, &mut chains, &mut exchange_rng);
+            since_exchange += step;
+            stats.mutations += step * nchains;
+            // Exchanges every `e` mutations, and at the end of a round (as sub-rounds always did).
+            if exchange_every.is_some_and(|e| since_exchange >= e.max(1) || left == 0) {
+                method.exchange(scene, &mut chains, &chain_groups, &mut exchange_rng);
+                since_exchange = 0;
+            }
+            if stopped() {
+                stats.interrupted = true;
+                break;
             }
         }
-        for (splats, rays) in outputs {
-            for (r, v) in splats {
-                film.add_splat(r, v);
-            }
+        for (chunk, rays) in outputs {
+            sink.absorb(chunk);
             stats.rays += rays;
         }
-        stats.mutations += k * nchains;
-        film.splat_scale = stats.mutations as f64 / pixels;
+        sink.mutations_done(stats.mutations, pixels);
         let elapsed = t.elapsed();
-        let go_on = progress(&film, stats.mutations, elapsed);
+        let go_on = progress(sink, stats.mutations, elapsed);
         let done = match (settings.budget, total) {
             (_, Some(t)) => stats.mutations >= t,
             (Budget::Time(limit), None) => elapsed >= limit,
             _ => true,
         };
-        if done || !go_on {
+        if done || !go_on || stats.interrupted {
             break;
         }
         if total.is_none() {
@@ -363,5 +396,5 @@ pub fn run<M: Method>(
     for c in &chains {
         stats.stats.merge(&c.stats);
     }
-    Ok((film, stats))
+    Ok(stats)
 }

@@ -4,17 +4,17 @@
 //! contributes its MIS-weighted value divided by the probability of choosing the strategy. Paths of
 //! one edge use `(0, 2)` only (as in BDPT).
 
-use super::driver::{Contribution, Method};
+use super::driver::Method;
 use super::importance::ImportanceKind;
 use super::pssmlt::{PrimaryState, mutate_primary};
 use super::stream::PrimaryStream;
 use crate::path::{
     MisHeuristic, Vertex, WalkSettings, camera_subpath, connect, light_subpath, mis_weight,
 };
-use crate::sampler::{CAMERA_STREAM, STREAMS, SampleStream, TECHNIQUE_STREAM};
+use crate::sampler::{CAMERA_STREAM, SampleStream, TECHNIQUE_STREAM};
 use crate::scene::Scene;
 use mcmc_core::kernel::Observer;
-use mcmc_core::primary_sample::{Kelemen, PrimarySample};
+use mcmc_core::primary_sample::Kelemen;
 use mcmc_core::{Chain, ChainRng, Proposal};
 use std::cell::RefCell;
 
@@ -43,14 +43,13 @@ impl Mmlt {
 
     /// Evaluate a state of length `k` (its group + 1).
     pub fn evaluate(&self, scene: &Scene, k: usize, state: &mut PrimaryState) {
-        let (w, h) = (scene.camera.width as f64, scene.camera.height as f64);
         state.contribution.splats.clear();
         state.contribution.importance = 0.0;
         let n = Self::strategies(k);
         let mut stream = PrimaryStream::new(&mut state.sample);
         stream.start_stream(TECHNIQUE_STREAM);
         let u = stream.next_1d();
-        let s = ((u * n as f64) as usize).min(n - 1);
+        let s = mcmc_core::rng::uniform_index(u, n);
         let t = k + 1 - s;
         let value = SUBPATHS.with(|b| {
             let (cam, light) = &mut *b.borrow_mut();
@@ -66,10 +65,12 @@ impl Mmlt {
         if let Some((raster, v)) = value
             && !v.is_black()
         {
-            let r = raster.unwrap_or([
-                state.sample.get(CAMERA_STREAM, 0) * w,
-                state.sample.get(CAMERA_STREAM, 1) * h,
-            ]);
+            let r = raster.unwrap_or_else(|| {
+                scene.camera.raster_of_film([
+                    state.sample.get(CAMERA_STREAM, 0),
+                    state.sample.get(CAMERA_STREAM, 1),
+                ])
+            });
             state.contribution.splats.push((r, v));
             state.contribution.importance = self.importance.of(v);
         }
@@ -83,16 +84,15 @@ impl Method for Mmlt {
         self.walk.max_edges
     }
 
-    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> PrimaryState {
-        let sample = PrimarySample::new(STREAMS, self.kelemen.small_step, seed)
-            .expect("small step validated when the integrator was built");
-        let mut s = PrimaryState {
-            sample,
-            contribution: Contribution::default(),
-            length: g + 1,
-        };
+    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (PrimaryState, f64) {
+        let mut s = PrimaryState::new(self.kelemen, seed, g + 1);
         self.evaluate(scene, g + 1, &mut s);
-        s
+        let w = s.contribution.importance;
+        (s, w)
+    }
+
+    fn ln_density(&self, _scene: &Scene, state: &PrimaryState) -> f64 {
+        state.contribution.importance.ln()
     }
 
     fn mutate<O: Observer<PrimaryState>>(

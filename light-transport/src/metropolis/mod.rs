@@ -8,19 +8,19 @@
 //! systematic resampling of that population in proportion to `I` (no start-up bias), each seed is
 //! replayed and must reproduce its bootstrap importance exactly; chains then run as `mcmc-core`
 //! Metropolis–Hastings chains, and every proposal is recorded by its expected value (`a` for the
-//! candidate, `1 − a` for the current state) with weight `b / I`.
+//! candidate, `1 − a` for the current state) with weight `b / I`, through a recorder ([`record`]):
+//! splats on the film, or anything else a method deposits.
 
 mod driver;
 mod importance;
 mod mmlt;
 mod pssmlt;
+pub mod record;
 mod stream;
 
-pub use driver::{
-    Budget, Contribution, Method, MetropolisSettings, MetropolisStats, Recordable, Seeding,
-    SplatRecorder, run,
-};
+pub use driver::{Method, MetropolisSettings, MetropolisStats, Seeding, run, run_with};
 pub use importance::ImportanceKind;
 pub use mmlt::Mmlt;
 pub use pssmlt::{PrimaryProposal, PrimaryState, PrimaryTarget, Pssmlt, mutate_primary};
+pub use record::{Contribution, ExpectedValue, Recordable, Recorder, Sink};
 pub use stream::PrimaryStream;

@@ -3,8 +3,9 @@
 //! of the sum of MIS-weighted contributions of *all* strategies connecting the two subpaths it
 //! generates, and the moves are Kelemen's small and large steps.
 
-use super::driver::{Contribution, Method, Recordable};
+use super::driver::Method;
 use super::importance::ImportanceKind;
+use super::record::{Contribution, Recordable};
 use super::stream::PrimaryStream;
 use crate::integrators::Bdpt;
 use crate::path::{Vertex, camera_subpath, light_subpath};
@@ -30,6 +31,18 @@ pub struct PrimaryState {
     pub length: usize,
 }
 
+impl PrimaryState {
+    /// A fresh state of path length `length` (0: all lengths) on the stream of `seed`,
+    /// unevaluated.
+    pub fn new(kelemen: Kelemen, seed: u64, length: usize) -> Self {
+        Self {
+            sample: PrimarySample::with_validated_step(STREAMS, kelemen.small_step, seed),
+            contribution: Contribution::default(),
+            length,
+        }
+    }
+}
+
 impl Recordable for PrimaryState {
     fn contribution(&self) -> &Contribution {
         &self.contribution
@@ -50,7 +63,6 @@ pub struct Pssmlt {
 impl Pssmlt {
     /// Evaluate a state: trace both subpaths from its numbers and sum every strategy.
     pub fn evaluate(&self, scene: &Scene, state: &mut PrimaryState) {
-        let (w, h) = (scene.camera.width as f64, scene.camera.height as f64);
         state.contribution.splats.clear();
         SUBPATHS.with(|b| {
             let (cam, light) = &mut *b.borrow_mut();
@@ -71,10 +83,10 @@ impl Pssmlt {
             let own = self
                 .bdpt
                 .evaluate(scene, light, cam, &mut state.contribution.splats);
-            let raster = [
-                state.sample.get(CAMERA_STREAM, 0) * w,
-                state.sample.get(CAMERA_STREAM, 1) * h,
-            ];
+            let raster = scene.camera.raster_of_film([
+                state.sample.get(CAMERA_STREAM, 0),
+                state.sample.get(CAMERA_STREAM, 1),
+            ]);
             if !own.is_black() {
                 state.contribution.splats.push((raster, own));
             }
@@ -143,16 +155,15 @@ impl Method for Pssmlt {
         1
     }
 
-    fn independent(&self, scene: &Scene, _g: usize, seed: u64) -> PrimaryState {
-        let sample = PrimarySample::new(STREAMS, self.kelemen.small_step, seed)
-            .expect("small step validated when the integrator was built");
-        let mut s = PrimaryState {
-            sample,
-            contribution: Contribution::default(),
-            length: 0,
-        };
+    fn independent(&self, scene: &Scene, _g: usize, seed: u64) -> (PrimaryState, f64) {
+        let mut s = PrimaryState::new(self.kelemen, seed, 0);
         self.evaluate(scene, &mut s);
-        s
+        let w = s.contribution.importance;
+        (s, w)
+    }
+
+    fn ln_density(&self, _scene: &Scene, state: &PrimaryState) -> f64 {
+        state.contribution.importance.ln()
     }
 
     fn mutate<O: Observer<PrimaryState>>(

@@ -59,11 +59,18 @@ pub fn connect(
     if s == 0 {
         return Some(c);
     }
-    let (qs, pt) = (&light[s - 1], &camera[t - 1]);
-    let n_pt = (t > 1).then(|| pt.n());
-    scene
-        .visible(qs.p(), surface_normal(scene, qs), pt.p(), n_pt)
-        .then_some(c)
+    unoccluded(scene, &light[s - 1], &camera[t - 1]).then_some(c)
+}
+
+/// Whether the edge between vertices `a` and `b` is unoccluded (ray origins offset along the
+/// normals of the vertices that lie on surfaces).
+pub fn unoccluded(scene: &Scene, a: &Vertex, b: &Vertex) -> bool {
+    scene.visible(
+        a.p(),
+        surface_normal(scene, a),
+        b.p(),
+        surface_normal(scene, b),
+    )
 }
 
 /// [`connect`] without the visibility test, for paths whose connecting edge is known to be

@@ -8,7 +8,7 @@ mod mis;
 mod vertex;
 mod walk;
 
-pub use connect::{Connection, GRAZING_COSINE, connect, connect_unoccluded, geometry};
+pub use connect::{Connection, GRAZING_COSINE, connect, connect_unoccluded, geometry, unoccluded};
 pub use mis::{MisHeuristic, mis_weight};
 pub use vertex::{Vertex, VertexKind};
 pub use walk::{WalkSettings, camera_subpath, light_subpath};

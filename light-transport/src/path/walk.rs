@@ -55,7 +55,7 @@ pub fn camera_subpath<S: SampleStream>(
     let mut film = stream.next_2d();
     let lens = stream.next_2d();
     if let Some(p) = pixel {
-        film = crate::integrators::film_position(scene, p, film);
+        film = scene.camera.film_position(p, film);
     }
     let cs = scene.camera.sample_ray(film, lens);
     path.push(Vertex {

@@ -20,26 +20,35 @@
 //!
 //! `I(f(ȳ)) / T(ȳ|x̄) = K_L K_C / (P_d P_a / N_split · Σ_a 1/I(C*_{l+1+a}(ȳ)))`
 //!
-//! and the acceptance is the ratio of this to the same quantity of the reverse move (delete the
-//! new vertices of `ȳ`, add back the `k_d − 1` deleted ones). Strategies that cannot make the path
-//! (a connection through a delta lobe) drop out of the sums.
-//!
-//! **New path** (practical-MLT paper §3.2): a whole new path by one bidirectional strategy —
-//! length `k` with probability `P_len(k)`, then `s` uniform in `0 … k` — with
-//! `T(ȳ) = P_len(k') / (k' + 1) · Σ_s p_s(ȳ)`.
+//! which is the mutation's density `T̃` in the common measure of [`super::mutation`] (its record
+//! is `(l, m, n)`). The acceptance is the ratio of the reverse move's `T̃` (delete the new
+//! vertices of `ȳ`, add back the `k_d − 1` deleted ones) to this one. Strategies that cannot make
+//! the path (a connection through a delta lobe) drop out of the sums.
 
-use super::perturbation::connection_clear;
+use super::mutation::{Change, Mutation, Registration};
 use super::state::PathState;
 use super::walk::{extend, lens_endpoint, light_endpoint};
 use crate::bsdf::TransportMode;
 use crate::metropolis::ImportanceKind;
-use crate::path::{Vertex, camera_subpath, connect, light_subpath};
-use crate::sampler::{IndependentStream, SampleStream, TECHNIQUE_STREAM};
+use crate::path::{Vertex, unoccluded};
 use crate::scene::Scene;
-use mcmc_core::rng::{categorical, uniform};
+use mcmc_core::rng::{categorical, uniform, uniform_index};
 use mcmc_core::{ChainRng, Failure};
 
-const NEW_PATH_STREAM: u64 = 0x4e57_9a7f;
+/// The registration of the bidirectional mutation.
+pub const REGISTRATION: Registration = Registration {
+    name: "bidirectional",
+    default_weight: 0.25,
+    build: |c| {
+        Box::new(BidirectionalMutation {
+            bidirectional: Bidirectional {
+                max_edges: c.settings.max_edges,
+            },
+            scene: c.scene,
+            importance: c.settings.importance,
+        })
+    },
+};
 
 /// Weight of deleting `kd` virtual edges.
 fn deletion_weight(kd: usize) -> f64 {
@@ -174,7 +183,7 @@ impl Bidirectional {
         p / splits as f64 * result.inverse_sum(from, from + splits)
     }
 
-    /// Propose `y` from `x`; returns `ln` of the acceptance ratio.
+    /// Propose `y` from `x` (evaluated, with its record); `Err` when no candidate was made.
     pub fn propose(
         &self,
         scene: &Scene,
@@ -182,18 +191,19 @@ impl Bidirectional {
         x: &PathState,
         rng: &mut ChainRng,
         y: &mut PathState,
-    ) -> Result<f64, Failure> {
+    ) -> Result<(), Failure> {
         let xp = &x.path;
         let k = xp.edges();
         if k < 1 {
             return Err(Failure::NotApplicable);
         }
+        // The deletion and the number of new vertices are the first draws (tests replay them).
         let d = self.sample_deletion(k, rng);
         let n = self
             .sample_addition(k, d, rng)
             .ok_or(Failure::NotApplicable)?;
         let splits = Self::splits(k, d, n);
-        let a = ((uniform(rng) * splits as f64) as usize).min(splits - 1);
+        let a = uniform_index(uniform(rng), splits);
         let b = n - a;
         // Light part.
         let mut light: Vec<Vertex> = Vec::with_capacity(k + n);
@@ -221,145 +231,59 @@ impl Bidirectional {
                 return Err(Failure::Failed);
             }
         }
+        y.change = Some(Change {
+            l: d.l,
+            m: d.m,
+            added: n,
+        });
         let (s, t) = (light.len(), cam.len());
-        if s > 0 && !connection_clear(scene, &light[s - 1], &cam[t - 1]) {
-            return Ok(f64::NEG_INFINITY);
-        }
-        if y.path
-            .set_from_subpaths(scene, &light, &cam, s, t)
-            .is_none()
+        let clear = s == 0 || unoccluded(scene, &light[s - 1], &cam[t - 1]);
+        if !clear
+            || y.path
+                .set_from_subpaths(scene, &light, &cam, s, t)
+                .is_none()
             || !y.evaluate(scene, importance, 1.0)
         {
-            return Ok(f64::NEG_INFINITY);
+            y.discard();
         }
-        let forward = self.move_weight(k, d, n, y);
-        let k_new = y.path.edges();
-        let d_back = Deletion {
-            l: d.l,
-            m: (d.l + 1) as usize + n,
-        };
-        let backward = self.move_weight(k_new, d_back, d.kd() - 1, x);
-        if !(forward > 0.0) {
-            // The strategy that made ȳ contributes nothing: f(ȳ) = 0.
-            return Ok(f64::NEG_INFINITY);
+        Ok(())
+    }
+
+    /// `ln T̃` of making `y` from `x` by the change `c` (module docs; `−∞` when no deletion and
+    /// addition of this mutation does it).
+    pub fn ln_density(&self, x: &PathState, y: &PathState, c: Change) -> f64 {
+        let k = x.path.edges();
+        let d = Deletion { l: c.l, m: c.m };
+        if k < 1 || !d.allowed(k) || c.result_edges(k) != Some(y.path.edges()) {
+            return f64::NEG_INFINITY;
         }
-        Ok(backward.ln() - forward.ln())
+        let w = self.move_weight(k, d, c.added, y);
+        if w > 0.0 { w.ln() } else { f64::NEG_INFINITY }
     }
 }
 
-/// Sample a whole path of `k` edges by strategy `s` (light vertices) from `stream`, as BDPT would
-/// (the connection is tested for visibility); `None` when the subpaths fall short or the
-/// connection carries nothing.
-pub fn sample_path<S: SampleStream>(
-    scene: &Scene,
-    k: usize,
-    s: usize,
-    stream: &mut S,
-    buffers: &mut (Vec<Vertex>, Vec<Vertex>),
-    out: &mut PathState,
-) -> Option<()> {
-    let t = k + 1 - s;
-    let (light, cam) = buffers;
-    camera_subpath(scene, stream, t, None, cam);
-    light_subpath(scene, stream, s, light);
-    if cam.len() < t || light.len() < s {
-        return None;
-    }
-    connect(scene, light, cam, s, t)?;
-    out.path.set_from_subpaths(scene, light, cam, s, t)
+/// The bidirectional mutation on a scene.
+struct BidirectionalMutation<'a> {
+    bidirectional: Bidirectional,
+    scene: &'a Scene,
+    importance: ImportanceKind,
 }
 
-/// The new-path mutation and the bootstrap sampler: a path of length `k` by a uniformly chosen
-/// strategy.
-#[derive(Clone, Debug, PartialEq)]
-pub struct NewPath {
-    /// `P_len(k)` for `k = 1 … max_edges` (index `k − 1`), summing to 1.
-    pub length_probability: Vec<f64>,
-}
-
-impl NewPath {
-    /// Uniform lengths up to `max_edges`.
-    pub fn uniform(max_edges: usize) -> Self {
-        Self {
-            length_probability: vec![1.0 / max_edges.max(1) as f64; max_edges.max(1)],
-        }
+impl Mutation for BidirectionalMutation<'_> {
+    fn name(&self) -> &'static str {
+        REGISTRATION.name
     }
 
-    /// Lengths in proportion to the energy `b_k` of each length, mixed with 20% uniform so that
-    /// every length stays reachable.
-    pub fn from_energies(energies: &[f64]) -> Self {
-        let n = energies.len().max(1);
-        let total: f64 = energies.iter().filter(|e| e.is_finite()).sum();
-        if !(total > 0.0) {
-            return Self::uniform(n);
-        }
-        Self {
-            length_probability: energies
-                .iter()
-                .map(|&e| {
-                    let e = if e.is_finite() && e > 0.0 { e } else { 0.0 };
-                    0.8 * e / total + 0.2 / n as f64
-                })
-                .collect(),
-        }
+    fn suitability(&self, x: &PathState) -> f64 {
+        (x.path.edges() >= 1) as u8 as f64
     }
 
-    fn probability(&self, k: usize) -> f64 {
-        k.checked_sub(1)
-            .and_then(|i| self.length_probability.get(i))
-            .copied()
-            .unwrap_or(0.0)
+    fn propose(&self, x: &PathState, rng: &mut ChainRng, y: &mut PathState) -> Result<(), Failure> {
+        self.bidirectional
+            .propose(self.scene, self.importance, x, rng, y)
     }
 
-    /// A path of `k` edges from the numbers of `stream` (strategy from the technique stream),
-    /// evaluated with colour scaled by `k + 1` (so that `I(colour)` is the importance weight
-    /// `I(f)/q_k` of the sample within its length). Deterministic in the stream.
-    pub fn sample<S: SampleStream>(
-        scene: &Scene,
-        importance: ImportanceKind,
-        k: usize,
-        stream: &mut S,
-        out: &mut PathState,
-    ) -> bool {
-        stream.start_stream(TECHNIQUE_STREAM);
-        let u = stream.next_1d();
-        let s = ((u * (k + 1) as f64) as usize).min(k);
-        let mut buffers = (Vec::new(), Vec::new());
-        if sample_path(scene, k, s, stream, &mut buffers, out).is_none() {
-            out.path.vertices.clear();
-            out.strategy.clear();
-            out.contribution = Default::default();
-            return false;
-        }
-        out.evaluate(scene, importance, (k + 1) as f64)
-    }
-
-    /// Propose a new path `y`; returns `ln` of the acceptance ratio.
-    pub fn propose(
-        &self,
-        scene: &Scene,
-        importance: ImportanceKind,
-        x: &PathState,
-        rng: &mut ChainRng,
-        y: &mut PathState,
-    ) -> Result<f64, Failure> {
-        let k = categorical(&self.length_probability, uniform(rng))
-            .map_or(self.length_probability.len(), |i| i + 1);
-        let mut stream = IndependentStream::new(mcmc_core::rng::stream(
-            rand::Rng::next_u64(rng),
-            NEW_PATH_STREAM,
-        ));
-        if !Self::sample(scene, importance, k, &mut stream, y) {
-            return Ok(f64::NEG_INFINITY);
-        }
-        let weight = |st: &PathState| {
-            let k = st.path.edges();
-            self.probability(k) / (k + 1) as f64 * st.inverse_sum(0, k + 1)
-        };
-        let (forward, backward) = (weight(y), weight(x));
-        if !(forward > 0.0) {
-            return Ok(f64::NEG_INFINITY);
-        }
-        Ok(backward.ln() - forward.ln())
+    fn ln_density(&self, x: &PathState, y: &PathState, change: Change) -> f64 {
+        self.bidirectional.ln_density(x, y, change)
     }
 }

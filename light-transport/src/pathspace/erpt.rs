@@ -12,23 +12,23 @@
 //! mutations' mixing. `e_d` is set from a deterministic pilot so that a pixel starts
 //! `chains_per_seed` chains on average.
 
-use super::bidirectional::NewPath;
 use super::mutations::{MutationProbabilities, Mutations};
+use super::new_path::NewPath;
 use super::path::FullPath;
 use super::state::PathState;
 use crate::integrators::{Estimator, Splat};
-use crate::metropolis::SplatRecorder;
+use crate::metropolis::ExpectedValue;
 use crate::path::{Vertex, camera_subpath, connect, light_subpath};
 use crate::sampler::IndependentStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use crate::{Error, Result};
-use mcmc_core::rng::uniform;
+use mcmc_core::rng::{uniform, uniform_index};
 use mcmc_core::{Chain, Stats};
 use std::sync::Mutex;
 
 /// ERPT settings.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ErptSettings {
     /// Mutations (their probabilities and offsets); default: the perturbations only.
     pub mutations: Mutations,
@@ -45,10 +45,8 @@ impl ErptSettings {
     pub fn new(max_edges: usize) -> Self {
         Self {
             mutations: Mutations {
-                max_edges,
-                importance: Default::default(),
                 probabilities: MutationProbabilities::perturbations(),
-                perturbation: Default::default(),
+                ..Mutations::new(max_edges)
             },
             chain_length: 100,
             chains_per_seed: 1.0,
@@ -73,9 +71,8 @@ impl Erpt {
     /// Set up ERPT on `scene`: validates the settings and runs the pilot for `e_d`.
     pub fn new(scene: &Scene, settings: ErptSettings) -> Result<Self> {
         let m = &settings.mutations;
-        m.probabilities.validate()?;
-        m.perturbation.validate()?;
-        if m.max_edges == 0 || settings.chain_length == 0 || settings.pilot == 0 {
+        m.validate()?;
+        if settings.chain_length == 0 || settings.pilot == 0 {
             return Err(Error::InvalidParameter {
                 name: "erpt".into(),
                 reason: "need max depth ≥ 1, chain length ≥ 1 and pilot ≥ 1".into(),
@@ -93,7 +90,7 @@ impl Erpt {
         for i in 0..settings.pilot {
             let mut stream =
                 IndependentStream::new(mcmc_core::rng::substream(0, PILOT_STREAM, i as u64));
-            let pixel = ((uniform(&mut stream.rng) * npix as f64) as usize).min(npix - 1);
+            let pixel = uniform_index(uniform(&mut stream.rng), npix);
             seed_paths(scene, m, pixel, &mut stream, &mut seeds);
             total += seeds.iter().map(|(_, e)| e).sum::<f64>();
         }
@@ -105,10 +102,31 @@ impl Erpt {
             )));
         }
         Ok(Self {
-            settings,
             quantum: mean / settings.chains_per_seed,
+            settings,
             stats: Mutex::new((Stats::default(), 0)),
         })
+    }
+
+    /// ERPT's statistics for people: energy quantum, chains, acceptance per mutation kind
+    /// (`pixels`: of the image).
+    pub fn summary(&self, pixels: f64) -> Vec<String> {
+        let (stats, chains) = self.statistics();
+        let mut out = vec![format!(
+            "erpt       energy quantum e_d = {:.4e}, {} chains of {} mutations ({:.2} chains per pixel)",
+            self.quantum,
+            chains,
+            self.settings.chain_length,
+            chains as f64 / pixels
+        )];
+        out.extend(
+            stats
+                .table(&Mutations::kinds())
+                .to_string()
+                .lines()
+                .map(str::to_string),
+        );
+        out
     }
 
     /// Acceptance per mutation kind and the number of chains run so far.
@@ -177,11 +195,14 @@ impl Estimator for Erpt {
         if seeds.is_empty() {
             return Rgb::BLACK;
         }
-        let np = NewPath::uniform(m.max_edges);
+        // Validated in `new`: building the mixture cannot fail.
+        let Ok(proposal) = m.proposal(scene, NewPath::uniform(m.max_edges)) else {
+            return Rgb::BLACK;
+        };
         let mut stats = Stats::default();
         let mut chains = 0;
-        let mut rec = SplatRecorder {
-            splats,
+        let mut rec = ExpectedValue {
+            recorder: splats,
             b: self.quantum / n as f64,
         };
         for (state, e) in seeds {
@@ -190,7 +211,7 @@ impl Estimator for Erpt {
                 let Ok(mut chain) = Chain::with_density(state.clone(), 0.0) else {
                     continue;
                 };
-                m.run(scene, &np, &mut chain, n, &mut stream.rng, &mut rec);
+                Mutations::run(&proposal, &mut chain, n, &mut stream.rng, &mut rec);
                 stats.merge(&chain.stats);
                 chains += 1;
             }

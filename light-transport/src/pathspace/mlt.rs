@@ -7,13 +7,13 @@
 //! seeds the chains without start-up bias. Chains then move freely between lengths (bidirectional
 //! and new-path mutations); the new-path mutation picks lengths in proportion to `b_k`.
 
-use super::bidirectional::NewPath;
 use super::mutations::Mutations;
+use super::new_path::NewPath;
 use super::state::PathState;
+use crate::Result;
 use crate::metropolis::Method;
 use crate::sampler::IndependentStream;
 use crate::scene::Scene;
-use crate::{Error, Result};
 use mcmc_core::kernel::Observer;
 use mcmc_core::{Chain, ChainRng};
 use std::sync::RwLock;
@@ -29,14 +29,7 @@ pub struct PathMlt {
 impl PathMlt {
     /// Path-space MLT with `mutations`; errors on invalid probabilities or offsets.
     pub fn new(mutations: Mutations) -> Result<Self> {
-        mutations.probabilities.validate()?;
-        mutations.perturbation.validate()?;
-        if mutations.max_edges == 0 {
-            return Err(Error::InvalidParameter {
-                name: "max depth".into(),
-                reason: "path-space MLT needs paths of at least one edge".into(),
-            });
-        }
+        mutations.validate()?;
         Ok(Self {
             new_path: RwLock::new(NewPath::uniform(mutations.max_edges)),
             mutations,
@@ -59,17 +52,18 @@ impl Method for PathMlt {
         self.mutations.max_edges
     }
 
-    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> PathState {
+    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (PathState, f64) {
         let mut stream = IndependentStream::new(mcmc_core::rng::stream(seed, 0));
         let mut state = PathState::default();
-        NewPath::sample(
-            scene,
-            self.mutations.importance,
-            g + 1,
-            &mut stream,
-            &mut state,
-        );
-        state
+        let k = g + 1;
+        NewPath::sample(scene, self.mutations.importance, k, &mut stream, &mut state);
+        // Strategy s uniform in 0 … k: the weight within its length is (k + 1) I(f / Σ_s p_s).
+        let w = (k + 1) as f64 * state.contribution.importance;
+        (state, w)
+    }
+
+    fn ln_density(&self, _scene: &Scene, state: &PathState) -> f64 {
+        super::mutations::ln_target(state)
     }
 
     fn bootstrap_done(&self, group_normalisation: &[f64]) {
@@ -88,8 +82,10 @@ impl Method for PathMlt {
         rng: &mut ChainRng,
         observer: &mut O,
     ) {
-        let np = self.new_path();
-        self.mutations.run(scene, &np, chain, n, rng, observer);
+        // Validated in `new`: building the mixture cannot fail.
+        if let Ok(proposal) = self.mutations.proposal(scene, self.new_path()) {
+            Mutations::run(&proposal, chain, n, rng, observer);
+        }
     }
 
     fn kinds(&self) -> Vec<String> {

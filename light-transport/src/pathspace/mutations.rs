@@ -1,101 +1,108 @@
-//! The mutation set of path-space MLT and one Metropolis–Hastings step over it: a mutation is
-//! chosen with fixed probabilities (independent of the state, so each mutation's own balance
-//! makes the mixture balanced), proposes a candidate with the log of its acceptance ratio, and the
-//! chain decides. Mutations that do not apply to the current path, or whose construction fails,
-//! count as rejected proposals (the current path is recorded with weight 1) and are counted.
+//! The registry of path-space mutations and the mixture they run as: every mutation implements
+//! [`Mutation`] in its own file and is listed once in [`REGISTRY`]; path-space MLT, ERPT and the
+//! identity-chart moves of charted MLT choose among them with [`MutationProbabilities`] and run
+//! them as one `mcmc_core` [`Mixture`] — per component (each mutation's own ratio) or combined
+//! (`Σ_k P_k T̃_k`, seed 002 eq. 4) — whose components are chosen with fixed probabilities or in
+//! proportion to their suitability for the current path (exactly: the selection probabilities
+//! enter the ratio). Mutations that do not apply to the current path, or whose construction
+//! fails, count as rejected proposals (the current path is recorded with weight 1) and are
+//! counted.
 
-use super::bidirectional::{Bidirectional, NewPath};
-use super::lens_subpath::lens_subpath;
-use super::perturbation::{CameraSide, PerturbationSettings, camera_side, caustic};
+use super::mutation::{Mutation, MutationContext, MutationProposal, Registration};
+use super::new_path::NewPath;
+use super::perturbation::PerturbationSettings;
 use super::state::PathState;
 use crate::metropolis::ImportanceKind;
 use crate::scene::Scene;
 use crate::{Error, Result};
 use mcmc_core::kernel::Observer;
-use mcmc_core::rng::{categorical, uniform};
-use mcmc_core::{Chain, ChainRng};
+use mcmc_core::proposals::{Mixture, MixtureRule, Selection};
+use mcmc_core::{Chain, ChainRng, Kernel, MetropolisHastings};
 use std::fmt;
 use std::str::FromStr;
 
-/// The mutations of Veach & Guibas plus the new-path mutation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum MutationKind {
-    /// Replace a subpath by a bidirectionally sampled one, possibly of another length.
-    Bidirectional,
-    /// Replace the lens subpath `[^S] S* E`.
-    LensSubpath,
-    /// Offset the image position and follow the eye's specular chain.
-    Lens,
-    /// Offset the direction leaving the last non-specular vertex before the eye's.
-    Caustic,
-    /// Lens perturbation continued through further specular chains.
-    MultiChain,
-    /// A whole new path (independence sampler).
-    NewPath,
+/// Every path-space mutation, in statistics order. A new mutation is one file and one line here.
+pub const REGISTRY: &[Registration] = &[
+    super::bidirectional::REGISTRATION,
+    super::lens_subpath::REGISTRATION,
+    super::lens::REGISTRATION,
+    super::caustic::REGISTRATION,
+    super::multi_chain::REGISTRATION,
+    super::new_path::REGISTRATION,
+];
+
+/// The index of the registered mutation `name`.
+pub fn index_of(name: &str) -> Option<usize> {
+    REGISTRY.iter().position(|r| r.name == name)
 }
 
-impl MutationKind {
-    /// All kinds, in statistics order.
-    pub const ALL: [MutationKind; 6] = [
-        MutationKind::Bidirectional,
-        MutationKind::LensSubpath,
-        MutationKind::Lens,
-        MutationKind::Caustic,
-        MutationKind::MultiChain,
-        MutationKind::NewPath,
-    ];
+/// The names of the registered mutations.
+pub fn names() -> Vec<String> {
+    REGISTRY.iter().map(|r| r.name.to_string()).collect()
+}
 
-    /// The name used on the command line and in statistics.
-    pub fn name(&self) -> &'static str {
-        match self {
-            MutationKind::Bidirectional => "bidirectional",
-            MutationKind::LensSubpath => "lens-subpath",
-            MutationKind::Lens => "lens",
-            MutationKind::Caustic => "caustic",
-            MutationKind::MultiChain => "multi-chain",
-            MutationKind::NewPath => "new-path",
-        }
+/// The target of path-space chains in the common measure of [`super::mutation`]: 1 on paths that
+/// carry light, 0 elsewhere (log density 0 or `−∞`).
+pub fn ln_target(s: &PathState) -> f64 {
+    if s.carries_light() {
+        0.0
+    } else {
+        f64::NEG_INFINITY
     }
 }
 
-/// Selection probabilities of the mutations (normalised when used).
+/// Selection weights of the registered mutations (normalised when used), in [`REGISTRY`] order.
 ///
 /// Defaults: bidirectional 0.25, lens subpath 0.1, lens 0.2, caustic 0.2, multi-chain 0.15, new
 /// path 0.1 — the bidirectional and new-path mutations keep the chain ergodic, the perturbations
 /// explore locally (their shares follow the practical-MLT paper's equal use of perturbations).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MutationProbabilities(pub [f64; 6]);
+#[derive(Clone, Debug, PartialEq)]
+pub struct MutationProbabilities(pub Vec<f64>);
 
 impl Default for MutationProbabilities {
     fn default() -> Self {
-        Self([0.25, 0.1, 0.2, 0.2, 0.15, 0.1])
+        Self(REGISTRY.iter().map(|r| r.default_weight).collect())
     }
 }
 
 impl MutationProbabilities {
-    /// Only `kind` and the new-path mutation, half each (the per-mutation convergence tests).
-    pub fn with_new_path(kind: MutationKind) -> Self {
-        let mut p = [0.0; 6];
-        p[kind as usize] += 0.5;
-        p[MutationKind::NewPath as usize] += 0.5;
-        Self(p)
+    /// Only the named mutations with the given weights (the others get 0).
+    pub fn of(weights: &[(&str, f64)]) -> Result<Self> {
+        let mut p = vec![0.0; REGISTRY.len()];
+        for (name, w) in weights {
+            let i = index_of(name).ok_or_else(|| unknown(name))?;
+            p[i] += w;
+        }
+        let out = Self(p);
+        out.validate()?;
+        Ok(out)
+    }
+
+    /// Only `name` and the new-path mutation, half each (the per-mutation convergence tests).
+    pub fn with_new_path(name: &str) -> Result<Self> {
+        Self::of(&[(name, 0.5), ("new-path", 0.5)])
     }
 
     /// The perturbations only (energy redistribution path tracing): lens 0.4, caustic 0.3,
     /// multi-chain 0.3.
     pub fn perturbations() -> Self {
-        Self([0.0, 0.0, 0.4, 0.3, 0.3, 0.0])
+        Self::of(&[("lens", 0.4), ("caustic", 0.3), ("multi-chain", 0.3)])
+            .unwrap_or_else(|_| Self::default())
     }
 
-    /// The probability of `kind`, normalised.
-    pub fn of(&self, kind: MutationKind) -> f64 {
-        self.0[kind as usize] / self.0.iter().sum::<f64>()
+    /// The normalised probability of the mutation `name` (0 for unknown names).
+    pub fn probability(&self, name: &str) -> f64 {
+        let total: f64 = self.0.iter().sum();
+        index_of(name).map_or(0.0, |i| self.0[i] / total)
     }
 
-    /// Check: non-negative, finite, not all zero.
+    /// Check: one non-negative finite value per registered mutation, not all zero.
     pub fn validate(&self) -> Result<()> {
         let total: f64 = self.0.iter().sum();
-        if self.0.iter().all(|p| p.is_finite() && *p >= 0.0) && total > 0.0 {
+        if self.0.len() == REGISTRY.len()
+            && self.0.iter().all(|p| p.is_finite() && *p >= 0.0)
+            && total > 0.0
+        {
             Ok(())
         } else {
             Err(Error::InvalidParameter {
@@ -104,18 +111,21 @@ impl MutationProbabilities {
             })
         }
     }
+}
 
-    /// Draw a mutation kind with these probabilities.
-    pub fn pick(&self, rng: &mut ChainRng) -> MutationKind {
-        categorical(&self.0, uniform(rng)).map_or(MutationKind::NewPath, |i| MutationKind::ALL[i])
+fn unknown(name: &str) -> Error {
+    Error::InvalidParameter {
+        name: "mutations".into(),
+        reason: format!("unknown mutation '{name}' (known: {})", names().join(", ")),
     }
 }
 
 impl fmt::Display for MutationProbabilities {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let parts: Vec<String> = MutationKind::ALL
+        let parts: Vec<String> = REGISTRY
             .iter()
-            .map(|k| format!("{}={}", k.name(), self.0[*k as usize]))
+            .zip(&self.0)
+            .map(|(r, p)| format!("{}={p}", r.name))
             .collect();
         f.write_str(&parts.join(","))
     }
@@ -124,9 +134,9 @@ impl fmt::Display for MutationProbabilities {
 impl FromStr for MutationProbabilities {
     type Err = Error;
 
-    /// `name=p,name=p,…` with the names of [`MutationKind::name`]; unnamed kinds get 0.
+    /// `name=p,name=p,…` with the registered names; unnamed mutations get 0.
     fn from_str(s: &str) -> Result<Self> {
-        let mut p = [0.0; 6];
+        let mut pairs = Vec::new();
         for part in s.split(',').map(str::trim).filter(|x| !x.is_empty()) {
             let bad = |reason: String| Error::InvalidParameter {
                 name: "mutations".into(),
@@ -135,106 +145,141 @@ impl FromStr for MutationProbabilities {
             let (name, value) = part
                 .split_once('=')
                 .ok_or_else(|| bad(format!("expected name=probability, got '{part}'")))?;
-            let kind = MutationKind::ALL
-                .into_iter()
-                .find(|k| k.name() == name.trim())
-                .ok_or_else(|| {
-                    let names: Vec<&str> = MutationKind::ALL.iter().map(|k| k.name()).collect();
-                    bad(format!(
-                        "unknown mutation '{}' (known: {})",
-                        name.trim(),
-                        names.join(", ")
-                    ))
-                })?;
-            p[kind as usize] = value
+            let v: f64 = value
                 .trim()
                 .parse()
                 .map_err(|_| bad(format!("'{}' is not a number", value.trim())))?;
+            pairs.push((name.trim(), v));
         }
-        let out = Self(p);
-        out.validate()?;
-        Ok(out)
+        Self::of(&pairs)
     }
 }
 
-/// Everything a path-space chain step needs.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The settings every mutation is built from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MutationSettings {
+    /// Longest path (edges).
+    pub max_edges: usize,
+    /// Colour to scalar.
+    pub importance: ImportanceKind,
+    /// Offsets of the perturbations.
+    pub perturbation: PerturbationSettings,
+    /// Lengths of new paths.
+    pub new_path: NewPath,
+}
+
+/// A mutation set: settings, selection weights, and the mixture rules.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Mutations {
     /// Longest path (edges).
     pub max_edges: usize,
     /// Colour to scalar.
     pub importance: ImportanceKind,
-    /// Mutation selection.
+    /// Mutation selection weights.
     pub probabilities: MutationProbabilities,
     /// Offsets of the perturbations.
     pub perturbation: PerturbationSettings,
+    /// Per-component or combined transition densities.
+    pub rule: MixtureRule,
+    /// Fixed selection, or in proportion to suitability for the current path.
+    pub selection: Selection,
 }
 
 impl Mutations {
-    /// Propose `y` from `x` by `kind`: the log acceptance ratio, or why no candidate was made.
-    pub fn propose(
-        &self,
-        scene: &Scene,
-        kind: MutationKind,
-        new_path: &NewPath,
-        x: &PathState,
-        rng: &mut ChainRng,
-        y: &mut PathState,
-    ) -> std::result::Result<f64, mcmc_core::Failure> {
-        let p = &self.perturbation;
-        let imp = self.importance;
-        match kind {
-            MutationKind::Bidirectional => Bidirectional {
-                max_edges: self.max_edges,
-            }
-            .propose(scene, imp, x, rng, y),
-            MutationKind::LensSubpath => lens_subpath(scene, self.max_edges, imp, x, rng, y),
-            MutationKind::Lens => camera_side(scene, CameraSide::Lens, p, imp, x, rng, y),
-            MutationKind::MultiChain => {
-                camera_side(scene, CameraSide::MultiChain, p, imp, x, rng, y)
-            }
-            MutationKind::Caustic => caustic(scene, p, imp, x, rng, y),
-            MutationKind::NewPath => new_path.propose(scene, imp, x, rng, y),
+    /// The defaults for paths of at most `max_edges` edges: the default probabilities, each
+    /// mutation's own ratio, suitability-weighted selection.
+    pub fn new(max_edges: usize) -> Self {
+        Self {
+            max_edges,
+            importance: ImportanceKind::default(),
+            probabilities: MutationProbabilities::default(),
+            perturbation: PerturbationSettings::default(),
+            rule: MixtureRule::PerComponent,
+            selection: Selection::Suitability,
         }
     }
 
-    /// `n` Metropolis–Hastings steps of `chain`. Path-space chains carry no absolute density
-    /// (paths with specular vertices have none): `chain.ln_density` is held at 0 and each
-    /// mutation hands the whole log acceptance ratio to [`Chain::decide`].
-    pub fn run<O: Observer<PathState>>(
+    /// Check the settings.
+    pub fn validate(&self) -> Result<()> {
+        self.probabilities.validate()?;
+        self.perturbation.validate()?;
+        if self.max_edges == 0 {
+            return Err(Error::InvalidParameter {
+                name: "max depth".into(),
+                reason: "path-space mutations need paths of at least one edge".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The settings the mutations are built from, with new paths of lengths `new_path`.
+    pub fn settings(&self, new_path: NewPath) -> MutationSettings {
+        MutationSettings {
+            max_edges: self.max_edges,
+            importance: self.importance,
+            perturbation: self.perturbation,
+            new_path,
+        }
+    }
+
+    /// The registered mutation `name` built on `scene`.
+    pub fn mutation<'a>(
+        scene: &'a Scene,
+        settings: &MutationSettings,
+        name: &str,
+    ) -> Option<Box<dyn Mutation + 'a>> {
+        let r = REGISTRY.iter().find(|r| r.name == name)?;
+        Some((r.build)(&MutationContext { scene, settings }))
+    }
+
+    /// The mixture of the mutations with positive weight, as an `mcmc_core` proposal whose kinds
+    /// are all registered mutations in [`REGISTRY`] order.
+    pub fn proposal<'a>(
         &self,
-        scene: &Scene,
-        new_path: &NewPath,
+        scene: &'a Scene,
+        new_path: NewPath,
+    ) -> Result<Mixture<'a, PathState>> {
+        let settings = self.settings(new_path);
+        let context = MutationContext {
+            scene,
+            settings: &settings,
+        };
+        let components = REGISTRY
+            .iter()
+            .zip(&self.probabilities.0)
+            .map(|(r, &w)| {
+                let p: Box<dyn mcmc_core::Proposal<PathState> + Send + Sync + 'a> =
+                    Box::new(MutationProposal((r.build)(&context)));
+                (w, p)
+            })
+            .collect();
+        Mixture::new(components, self.rule)
+            .map(|m| m.with_selection(self.selection))
+            .map_err(|e| Error::InvalidParameter {
+                name: "mutation probabilities".into(),
+                reason: e.to_string(),
+            })
+    }
+
+    /// `n` Metropolis–Hastings steps of `chain` with `proposal` (from [`Mutations::proposal`]).
+    /// Path-space chains carry no absolute density (paths with specular vertices have none): in
+    /// the common measure the target is 1 on paths that carry light, so `chain.ln_density` is 0.
+    pub fn run<O: Observer<PathState>>(
+        proposal: &Mixture<'_, PathState>,
         chain: &mut Chain<PathState>,
         n: u64,
         rng: &mut ChainRng,
         observer: &mut O,
     ) {
         chain.ln_density = 0.0;
+        let mut mh = MetropolisHastings::new(ln_target, proposal);
         for _ in 0..n {
-            let kind = self.probabilities.pick(rng);
-            match self.propose(
-                scene,
-                kind,
-                new_path,
-                &chain.state,
-                rng,
-                &mut chain.candidate,
-            ) {
-                Ok(ln_ratio) => {
-                    chain.decide(0.0, ln_ratio, kind as usize, rng, observer);
-                    chain.ln_density = 0.0;
-                }
-                Err(why) => chain.fail(kind as usize, why, observer),
-            }
+            mh.step(chain, rng, observer);
         }
     }
 
-    /// Statistics names.
+    /// Statistics names (the registered mutations).
     pub fn kinds() -> Vec<String> {
-        MutationKind::ALL
-            .iter()
-            .map(|k| k.name().to_string())
-            .collect()
+        names()
     }
 }

@@ -1,31 +1,39 @@
-//! The perturbations of Veach & Guibas (1997, §5.3; practical-MLT paper §3.4 and eqs. 4–5):
-//! **lens**, **multi-chain** and **caustic** perturbations. Each moves one end of the path by a
-//! small random offset, propagates the move through the path's specular chain with the same
-//! reflection/refraction at every specular vertex, and reconnects to the unchanged rest of the
-//! path. The path keeps its structure, so the reverse move is the same perturbation.
+//! What the perturbations of Veach & Guibas (1997, §5.3; practical-MLT paper §3.4 and eqs. 4–5)
+//! share: their offset parameters, the structure they follow through a path's specular chains,
+//! and their densities. The **lens** and **multi-chain** perturbations ([`super::lens`],
+//! [`super::multi_chain`]) move the eye end of the path, the **caustic** perturbation
+//! ([`super::caustic`]) the light end. Each offsets one direction by a small random amount,
+//! propagates it through the path's specular chain with the same reflection/refraction at every
+//! specular vertex, and reconnects to the unchanged rest. The path keeps its structure, so the
+//! reverse move is the same perturbation.
 //!
-//! Transition densities. Write `s` for the strategy whose light subpath is the kept part (`s = j`
-//! for the camera-side perturbations, `s = k` — a `t = 1` connection — for the caustic
-//! perturbation). The generated vertices have the density `p_s` of that strategy's other subpath,
-//! except that (a) the first direction comes from a symmetric offset instead of the endpoint's
-//! distribution, (b) specular vertices are followed deterministically, without the probability
-//! `P` of choosing their lobe, and (c) every re-perturbed direction (multi-chain, caustic) comes
-//! from a symmetric angular offset instead of the BSDF density `p_σ`. With `f / p_s = C*_s`,
+//! **Densities.** Write `s` for the strategy whose light subpath is the kept part (`s = j` for the
+//! camera-side perturbations, `s = k` — a `t = 1` connection — for the caustic perturbation). The
+//! generated vertices have the density `p_s` of that strategy's other subpath, except that (a) the
+//! first direction comes from a symmetric offset `g` instead of the endpoint's distribution, (b)
+//! specular vertices are followed deterministically, without the probability `P` of choosing their
+//! lobe, and (c) every re-perturbed direction (multi-chain, caustic) comes from a symmetric angular
+//! offset `g_θ` instead of the BSDF density `p_σ`. In the common measure of [`super::mutation`]
+//! this gives
 //!
-//! `a(ȳ|x̄) = min(1, [I(C*_s(ȳ)) Π P(ȳ) Π p_σ(ȳ)] / [I(C*_s(x̄)) Π P(x̄) Π p_σ(x̄)])`,
+//! `T̃(ȳ|x̄) = g · Π g_θ / (p_first · I(C*_s(ȳ)) Π P(ȳ) Π p_σ(ȳ))`,
 //!
-//! the exact form of the practical-MLT paper's ratios (its `cos φ` factors are `p_σ` of a
-//! Lambertian surface or emitter; its `d²/cos` factors are inside `C*`).
+//! with `p_first` the density of the first direction in the strategy (`1/(W H)` per pixel² for the
+//! image position; `p_σ` of the light or BSDF for the caustic), so that
+//! `a(ȳ|x̄) = min(1, [I(C*_s(ȳ)) Π P(ȳ) Π p_σ(ȳ)] / [I(C*_s(x̄)) Π P(x̄) Π p_σ(x̄)])` — the exact form
+//! of the practical-MLT paper's ratios (its `cos φ` factors are `p_σ` of a Lambertian surface or
+//! emitter; its `d²/cos` factors are inside `C*`).
 
 use super::path::FullPath;
 use super::state::PathState;
-use super::walk::{angular_offset, pixel_offset, trace};
+use super::walk::{angular_offset, exponential_radius_pdf, pixel_offset, trace};
 use crate::bsdf::TransportMode;
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
-use crate::path::{Vertex, VertexKind};
+use crate::path::{Vertex, VertexKind, unoccluded};
 use crate::scene::Scene;
 use mcmc_core::{ChainRng, Failure};
+use std::f64::consts::TAU;
 
 /// Offset parameters of the perturbations (defaults: the practical-MLT paper, appendices B–C).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,6 +86,16 @@ impl PerturbationSettings {
             })
         }
     }
+
+    /// Density per pixel² of a pixel offset by `r` pixels.
+    pub fn pixel_offset_pdf(&self, scene: &Scene, r: f64) -> f64 {
+        exponential_radius_pdf(r, self.r1, self.r2(scene)) / (TAU * r)
+    }
+
+    /// Density per steradian of an angular offset turning `a` into `b`.
+    pub fn angular_offset_pdf(&self, a: DVec3, b: DVec3) -> f64 {
+        super::walk::angular_offset_pdf(a, b, self.theta1, self.theta2)
+    }
 }
 
 /// Unit direction from vertex `a` to vertex `b`.
@@ -95,49 +113,71 @@ pub fn refracts(path: &FullPath, i: usize) -> bool {
     a * b < 0.0
 }
 
-/// Probability that vertex `i`'s BSDF picks the delta lobe the path uses, sampling from the side
-/// of `from` toward `to` (`None` when no delta lobe produces it).
-fn branch_probability(v: &Vertex, from: &Vertex, to: &Vertex, mode: TransportMode) -> Option<f64> {
-    let b = v.bsdf.as_ref()?;
-    b.eval_delta(direction(v, from), direction(v, to), mode)
-        .map(|d| d.pdf)
-        .filter(|p| *p > 0.0)
+/// Probability that vertex `v`'s BSDF picks the delta lobe the path uses, sampling from the side
+/// of `from` toward `to` (0 when no delta lobe produces it).
+pub fn branch_probability(v: &Vertex, from: &Vertex, to: &Vertex, mode: TransportMode) -> f64 {
+    v.bsdf
+        .as_ref()
+        .and_then(|b| b.eval_delta(direction(v, from), direction(v, to), mode))
+        .map_or(0.0, |d| d.pdf)
 }
 
 /// BSDF density (solid angle) at `v` of leaving toward `to` having arrived from `from`.
-fn bsdf_pdf(v: &Vertex, from: &Vertex, to: &Vertex) -> f64 {
+pub fn bsdf_pdf(v: &Vertex, from: &Vertex, to: &Vertex) -> f64 {
     v.bsdf
         .as_ref()
         .map_or(0.0, |b| b.pdf(direction(v, from), direction(v, to)))
 }
 
-/// Follow the specular vertex `old` (of the current path) with the new vertex `v` hit by the
-/// walk: same lobe type (reflection or refraction). Returns the new outgoing direction and the
-/// log branch probabilities `(ln P(ȳ), ln P(x̄))`, or why it failed.
-fn follow_specular(
+/// Whether vertex `v` has a non-delta component (a perturbed chain may end or turn there).
+pub fn scatters_diffusely(v: &Vertex) -> bool {
+    v.bsdf.as_ref().is_some_and(|b| !b.is_delta_only())
+}
+
+/// Whether two paths follow the same specular structure over vertices `range`: the same vertices
+/// are specular, and those reflect or refract alike.
+pub fn same_specular_structure(x: &FullPath, y: &FullPath, range: std::ops::Range<usize>) -> bool {
+    range.into_iter().all(|i| {
+        x.specular(i) == y.specular(i) && (!x.specular(i) || refracts(x, i) == refracts(y, i))
+    })
+}
+
+/// `ln Π P` of `y`'s specular vertices in `range`, sampled walking toward lower indices
+/// (`toward_light`, camera walks) or higher ones (light walks); `−∞` when one cannot be made.
+pub fn ln_branch_probabilities(
+    y: &FullPath,
+    range: std::ops::Range<usize>,
+    toward_light: bool,
+    mode: TransportMode,
+) -> f64 {
+    let v = &y.vertices;
+    range
+        .filter(|&i| y.specular(i))
+        .map(|i| {
+            let p = if toward_light {
+                branch_probability(&v[i], &v[i + 1], &v[i - 1], mode)
+            } else {
+                branch_probability(&v[i], &v[i - 1], &v[i + 1], mode)
+            };
+            if p > 0.0 { p.ln() } else { f64::NEG_INFINITY }
+        })
+        .sum()
+}
+
+/// Follow the specular vertex `i` of `x` with the new vertex `v` the walk hit: the same lobe type
+/// (reflection or refraction); the direction leaving `v`.
+pub fn follow_specular(
     v: &mut Vertex,
     x: &FullPath,
     i: usize,
-    toward_lower: bool,
     mode: TransportMode,
-) -> Result<(DVec3, f64, f64), Failure> {
+) -> Result<DVec3, Failure> {
     let b = v.bsdf.as_ref().ok_or(Failure::Failed)?;
     let wi = b
         .delta_direction(v.wo, refracts(x, i), mode)
         .ok_or(Failure::Failed)?;
-    let p_y = b
-        .eval_delta(v.wo, wi, mode)
-        .map(|d| d.pdf)
-        .filter(|p| *p > 0.0)
-        .ok_or(Failure::Failed)?;
-    let (from, to) = if toward_lower {
-        (&x.vertices[i + 1], &x.vertices[i - 1])
-    } else {
-        (&x.vertices[i - 1], &x.vertices[i + 1])
-    };
-    let p_x = branch_probability(&x.vertices[i], from, to, mode).ok_or(Failure::NotApplicable)?;
     v.delta = true;
-    Ok((wi, p_y.ln(), p_x.ln()))
+    Ok(wi)
 }
 
 /// Which camera-side perturbation.
@@ -151,10 +191,26 @@ pub enum CameraSide {
     MultiChain,
 }
 
-/// Index of the first non-specular vertex counting from the eye (`v_{k−1}` down to `v_0`).
-pub fn first_non_specular_from_eye(x: &FullPath) -> usize {
-    let k = x.edges();
-    (1..k).rev().find(|&i| !x.specular(i)).unwrap_or(0)
+/// What a camera-side perturbation does to a path: it regenerates `v_s … v_{k−1}` (keeping the
+/// light part `v_0 … v_{s−1}` and the lens point) and re-offsets the direction leaving each vertex
+/// of `turns` (non-specular vertices followed by a specular one; multi-chain only).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CameraChain {
+    /// First regenerated vertex; its light-side neighbour is kept.
+    pub s: usize,
+    /// Vertices where the direction turns by an angular offset (descending).
+    pub turns: Vec<usize>,
+}
+
+impl CameraChain {
+    /// The record of the change.
+    pub fn change(&self, k: usize) -> super::mutation::Change {
+        super::mutation::Change {
+            l: self.s as isize - 1,
+            m: k,
+            added: k - self.s,
+        }
+    }
 }
 
 /// Whether a path could be reached by propagation ending at the light: `v_0` must be an area light.
@@ -165,8 +221,55 @@ fn hittable_light(scene: &Scene, x: &FullPath) -> bool {
     }
 }
 
-/// A lens or multi-chain perturbation of `x` into `y`; returns `ln` of the acceptance ratio.
-pub fn camera_side(
+/// The chain a camera-side perturbation follows on `x`, when it applies.
+pub fn camera_chain(scene: &Scene, which: CameraSide, x: &FullPath) -> Option<CameraChain> {
+    let k = x.edges();
+    if k < 1 {
+        return None;
+    }
+    let mut turns = Vec::new();
+    let mut i = k - 1;
+    loop {
+        if x.specular(i) {
+            i = i.checked_sub(1)?;
+            continue;
+        }
+        if i == 0 {
+            // The chain ends on the light: the camera walk must be able to hit it.
+            return hittable_light(scene, x).then_some(CameraChain { s: 0, turns });
+        }
+        if !scatters_diffusely(&x.vertices[i]) {
+            return None;
+        }
+        if !x.specular(i - 1) {
+            return Some(CameraChain { s: i, turns });
+        }
+        if which == CameraSide::Lens {
+            return None;
+        }
+        turns.push(i);
+        i -= 1;
+    }
+}
+
+/// The camera-side chain of `x` when the perturbation can move it: the path carries its
+/// strategy's light, its specular branches can be chosen and its turns sampled.
+pub fn camera_chain_of(scene: &Scene, which: CameraSide, x: &PathState) -> Option<CameraChain> {
+    let c = camera_chain(scene, which, &x.path)?;
+    let v = &x.path.vertices;
+    let k = x.path.edges();
+    let ok = x.strategy_importance(c.s) > 0.0
+        && x.path.raster(scene).is_some()
+        && ln_branch_probabilities(&x.path, c.s + 1..k, true, TransportMode::Radiance)
+            > f64::NEG_INFINITY
+        && c.turns
+            .iter()
+            .all(|&i| bsdf_pdf(&v[i], &v[i + 1], &v[i - 1]) > 0.0);
+    ok.then_some(c)
+}
+
+/// A lens or multi-chain perturbation of `x` into `y` (evaluated, with its record).
+pub fn camera_side_propose(
     scene: &Scene,
     which: CameraSide,
     settings: &PerturbationSettings,
@@ -174,19 +277,10 @@ pub fn camera_side(
     x: &PathState,
     rng: &mut ChainRng,
     y: &mut PathState,
-) -> Result<f64, Failure> {
+) -> Result<(), Failure> {
+    let chain = camera_chain_of(scene, which, x).ok_or(Failure::NotApplicable)?;
     let xp = &x.path;
     let k = xp.edges();
-    if k < 1 {
-        return Err(Failure::NotApplicable);
-    }
-    let j = first_non_specular_from_eye(xp);
-    if which == CameraSide::Lens && j > 0 && xp.specular(j - 1) {
-        return Err(Failure::NotApplicable);
-    }
-    if j == 0 && !hittable_light(scene, xp) {
-        return Err(Failure::NotApplicable);
-    }
     let raster = xp.raster(scene).ok_or(Failure::NotApplicable)?;
     let moved = pixel_offset(raster, settings.r1, settings.r2(scene), rng);
     let lens = xp.lens().clone();
@@ -197,17 +291,13 @@ pub fn camera_side(
     // New vertices in camera order: lens, v'_{k−1}, v'_{k−2}, …
     let mut cam: Vec<Vertex> = Vec::with_capacity(k + 1);
     cam.push(lens);
-    let (mut ln_y, mut ln_x) = (0.0, 0.0);
     let mut w = cs.ray.d;
     let mut i = k - 1;
-    let s = loop {
+    loop {
         let mut v = trace(scene, cam.last().ok_or(Failure::Failed)?, w).ok_or(Failure::Failed)?;
         if xp.specular(i) {
-            let (wi, py, px) = follow_specular(&mut v, xp, i, true, TransportMode::Radiance)?;
-            ln_y += py;
-            ln_x += px;
+            w = follow_specular(&mut v, xp, i, TransportMode::Radiance)?;
             cam.push(v);
-            w = wi;
             i -= 1;
             continue;
         }
@@ -219,131 +309,87 @@ pub fn camera_side(
             }
             v.kind = VertexKind::Light { light: li as u32 };
             cam.push(v);
-            break 0;
+            break;
         }
-        if v.bsdf.as_ref().is_none_or(|b| b.is_delta_only()) {
+        if !scatters_diffusely(&v) {
             return Err(Failure::Failed);
         }
-        if !xp.specular(i - 1) {
+        if i == chain.s {
             cam.push(v);
-            break i;
+            break;
         }
         // Multi-chain: offset the direction leaving this vertex toward the next chain.
-        debug_assert_eq!(which, CameraSide::MultiChain);
-        let old = &xp.vertices[i];
-        let w_x = direction(old, &xp.vertices[i - 1]);
-        let w_y = angular_offset(w_x, settings.theta1, settings.theta2, rng);
-        let p_x = bsdf_pdf(old, &xp.vertices[i + 1], &xp.vertices[i - 1]);
-        let p_y = v.bsdf.as_ref().map_or(0.0, |b| b.pdf(v.wo, w_y));
-        if !(p_x > 0.0) {
-            return Err(Failure::NotApplicable);
-        }
-        if !(p_y > 0.0) {
-            return Ok(f64::NEG_INFINITY);
-        }
-        ln_y += p_y.ln();
-        ln_x += p_x.ln();
+        let w_x = direction(&xp.vertices[i], &xp.vertices[i - 1]);
+        w = angular_offset(w_x, settings.theta1, settings.theta2, rng);
         cam.push(v);
-        w = w_y;
         i -= 1;
-    };
+    }
     // ȳ = kept light part v_0 … v_{s−1}, then the new camera part reversed.
+    let s = chain.s;
     let yp = &mut y.path;
     yp.vertices.clear();
     yp.vertices.extend_from_slice(&xp.vertices[..s]);
     yp.vertices.extend(cam.into_iter().rev());
-    if s > 0 && !connection_clear(scene, &yp.vertices[s - 1], &yp.vertices[s]) {
-        return Ok(f64::NEG_INFINITY);
-    }
     yp.vertices[s].delta = false;
-    finish(scene, importance, x, y, s, ln_y - ln_x)
+    y.change = Some(chain.change(k));
+    if (s > 0 && !unoccluded(scene, &yp.vertices[s - 1], &yp.vertices[s]))
+        || !y.evaluate(scene, importance, 1.0)
+    {
+        y.discard();
+    }
+    Ok(())
 }
 
-/// The caustic perturbation of `x` into `y` (paths `(L|D) S* D E`): offset the direction leaving
-/// the last non-specular vertex before the eye's, follow the specular chain, connect to the eye.
-pub fn caustic(
+/// `ln T̃` of a camera-side perturbation making `y` from `x` with record `c` (module docs).
+pub fn camera_side_density(
     scene: &Scene,
+    which: CameraSide,
     settings: &PerturbationSettings,
-    importance: ImportanceKind,
     x: &PathState,
-    rng: &mut ChainRng,
-    y: &mut PathState,
-) -> Result<f64, Failure> {
-    let xp = &x.path;
-    let k = xp.edges();
-    if k < 2 || xp.specular(k - 1) {
-        return Err(Failure::NotApplicable);
-    }
-    let i0 = (0..k - 1).rev().find(|&i| !xp.specular(i)).unwrap_or(0);
-    let start = &xp.vertices[i0];
-    let w_x = direction(start, &xp.vertices[i0 + 1]);
-    let w_y = angular_offset(w_x, settings.theta1, settings.theta2, rng);
-    let pdf_at = |w: DVec3| -> f64 {
-        match start.kind {
-            VertexKind::Light { light } => scene.lights[light as usize].pdf_direction(start.n(), w),
-            _ => match (&start.bsdf, i0) {
-                (Some(b), i) if i >= 1 => b.pdf(direction(start, &xp.vertices[i - 1]), w),
-                _ => 0.0,
-            },
-        }
+    y: &PathState,
+    c: super::mutation::Change,
+) -> f64 {
+    let never = f64::NEG_INFINITY;
+    let Some(chain) = camera_chain_of(scene, which, x) else {
+        return never;
     };
-    let (p_x, p_y) = (pdf_at(w_x), pdf_at(w_y));
-    if !(p_x > 0.0) {
-        return Err(Failure::NotApplicable);
+    let (xp, yp) = (&x.path, &y.path);
+    let k = xp.edges();
+    let s = chain.s;
+    if yp.edges() != k || c != chain.change(k) || !same_specular_structure(xp, yp, s + 1..k) {
+        return never;
     }
-    if !(p_y > 0.0) {
-        return Ok(f64::NEG_INFINITY);
+    let yv = &yp.vertices;
+    let end_ok = if s == 0 {
+        hittable_light(scene, yp)
+    } else {
+        scatters_diffusely(&yv[s]) && !yp.specular(s)
+    };
+    if !end_ok || !chain.turns.iter().all(|&i| scatters_diffusely(&yv[i])) {
+        return never;
     }
-    let (mut ln_y, mut ln_x) = (p_y.ln(), p_x.ln());
-    let yp = &mut y.path;
-    yp.vertices.clear();
-    yp.vertices.extend_from_slice(&xp.vertices[..=i0]);
-    let mut w = w_y;
-    for i in i0 + 1..k {
-        let last = yp.vertices.last().ok_or(Failure::Failed)?;
-        let mut v = trace(scene, last, w).ok_or(Failure::Failed)?;
-        if i < k - 1 {
-            let (wi, py, px) = follow_specular(&mut v, xp, i, false, TransportMode::Importance)?;
-            ln_y += py;
-            ln_x += px;
-            w = wi;
-        } else if v.bsdf.as_ref().is_none_or(|b| b.is_delta_only()) {
-            return Err(Failure::Failed);
+    let (Some(rx), Some(ry)) = (xp.raster(scene), yp.raster(scene)) else {
+        return never;
+    };
+    let r = ((ry[0] - rx[0]).powi(2) + (ry[1] - rx[1]).powi(2)).sqrt();
+    let g = settings.pixel_offset_pdf(scene, r);
+    let i_s = y.strategy_importance(s);
+    if !(g > 0.0 && i_s > 0.0) {
+        return never;
+    }
+    let pixels = (scene.camera.width * scene.camera.height) as f64;
+    let mut ln = g.ln() + pixels.ln()
+        - i_s.ln()
+        - ln_branch_probabilities(yp, s + 1..k, true, TransportMode::Radiance);
+    let xv = &xp.vertices;
+    for &i in &chain.turns {
+        let g_theta = settings
+            .angular_offset_pdf(direction(&xv[i], &xv[i - 1]), direction(&yv[i], &yv[i - 1]));
+        let p_sigma = bsdf_pdf(&yv[i], &yv[i + 1], &yv[i - 1]);
+        if !(g_theta > 0.0 && p_sigma > 0.0) {
+            return never;
         }
-        yp.vertices.push(v);
+        ln += g_theta.ln() - p_sigma.ln();
     }
-    yp.vertices.push(xp.lens().clone());
-    if !connection_clear(scene, &yp.vertices[k - 1], &yp.vertices[k]) {
-        return Ok(f64::NEG_INFINITY);
-    }
-    finish(scene, importance, x, y, k, ln_y - ln_x)
-}
-
-/// Whether the edge `a – b` is unoccluded.
-pub fn connection_clear(scene: &Scene, a: &Vertex, b: &Vertex) -> bool {
-    let na = a.on_surface(scene).then(|| a.n());
-    let nb = b.on_surface(scene).then(|| b.n());
-    scene.visible(a.p(), na, b.p(), nb)
-}
-
-/// Evaluate `y` and form `ln a = ln I(C*_s(ȳ)) − ln I(C*_s(x̄)) + extra`.
-fn finish(
-    scene: &Scene,
-    importance: ImportanceKind,
-    x: &PathState,
-    y: &mut PathState,
-    s: usize,
-    extra: f64,
-) -> Result<f64, Failure> {
-    if !y.evaluate(scene, importance, 1.0) {
-        return Ok(f64::NEG_INFINITY);
-    }
-    let (iy, ix) = (y.strategy_importance(s), x.strategy_importance(s));
-    if !(ix > 0.0) {
-        return Err(Failure::NotApplicable);
-    }
-    if !(iy > 0.0) {
-        return Ok(f64::NEG_INFINITY);
-    }
-    Ok(iy.ln() - ix.ln() + extra)
+    if ln.is_nan() { never } else { ln }
 }

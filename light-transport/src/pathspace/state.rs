@@ -5,6 +5,7 @@
 //! `f / Σ_s p_s` (the balance-heuristic estimate of the path), whose direction is that of `f`:
 //! the driver scales it by `b / I(colour)`, so only its direction matters.
 
+use super::mutation::Change;
 use super::path::{FullPath, Scratch};
 use crate::metropolis::{Contribution, ImportanceKind, Recordable};
 use crate::scene::Scene;
@@ -20,6 +21,9 @@ pub struct PathState {
     pub strategy: Vec<f64>,
     /// Splat and importance.
     pub contribution: Contribution,
+    /// How the mutation that proposed this state changed its source path (see
+    /// [`super::mutation`]); `None` for states not made by a mutation.
+    pub change: Option<Change>,
 }
 
 impl Recordable for PathState {
@@ -71,6 +75,19 @@ impl PathState {
         self.contribution.splats.push((raster, colour));
         self.contribution.importance = importance.of(colour);
         true
+    }
+
+    /// Whether the path carries light (its evaluation found a strategy with a positive
+    /// contribution).
+    pub fn carries_light(&self) -> bool {
+        self.contribution.importance > 0.0
+    }
+
+    /// Mark the state as carrying no light (a candidate whose connection is occluded).
+    pub fn discard(&mut self) {
+        self.strategy.clear();
+        self.contribution.splats.clear();
+        self.contribution.importance = 0.0;
     }
 
     /// `Σ 1/I(C*_s)` over strategies `s ∈ [from, to)` that can produce the path (0 if none).

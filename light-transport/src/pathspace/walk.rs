@@ -7,10 +7,12 @@
 //! Walks here only place vertices (position, BSDF, delta flag); throughputs and densities are
 //! recomputed by [`super::path::retrace`] when the path is evaluated.
 
+use super::state::PathState;
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, SurfacePoint, offset_origin};
 use crate::math::{DVec3, Frame};
-use crate::path::{Vertex, VertexKind};
+use crate::path::{Vertex, VertexKind, camera_subpath, connect, light_subpath};
+use crate::sampler::SampleStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use mcmc_core::ChainRng;
@@ -189,4 +191,26 @@ pub fn angular_offset_pdf(a: DVec3, b: DVec3, theta1: f64, theta2: f64) -> f64 {
     } else {
         0.0
     }
+}
+
+/// Sample a whole path of `k` edges by strategy `s` (light vertices) from `stream`, as BDPT would
+/// (the connection is tested for visibility); `None` when the subpaths fall short or the
+/// connection carries nothing. The path is not evaluated.
+pub fn sample_path<S: SampleStream>(
+    scene: &Scene,
+    k: usize,
+    s: usize,
+    stream: &mut S,
+    buffers: &mut (Vec<Vertex>, Vec<Vertex>),
+    out: &mut PathState,
+) -> Option<()> {
+    let t = k + 1 - s;
+    let (light, cam) = buffers;
+    camera_subpath(scene, stream, t, None, cam);
+    light_subpath(scene, stream, s, light);
+    if cam.len() < t || light.len() < s {
+        return None;
+    }
+    connect(scene, light, cam, s, t)?;
+    out.path.set_from_subpaths(scene, light, cam, s, t)
 }

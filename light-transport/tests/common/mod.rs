@@ -3,11 +3,10 @@
 
 #![allow(dead_code)]
 
+use light_transport::Budget;
 use light_transport::film::{Film, Image};
-use light_transport::integrators::{Bdpt, Budget as PassBudget, render};
-use light_transport::metropolis::{
-    self, Budget, Method, MetropolisSettings, MetropolisStats, Seeding,
-};
+use light_transport::integrators::{Bdpt, render};
+use light_transport::metropolis::{self, Method, MetropolisSettings, MetropolisStats, Seeding};
 use light_transport::path::{MisHeuristic, WalkSettings};
 use light_transport::scene::Scene;
 use mcmc_core::Stats;
@@ -82,7 +81,7 @@ pub fn bdpt_batches(scene: &Scene) -> Vec<Vec<f64>> {
                 &render(
                     scene,
                     &bdpt,
-                    PassBudget::SamplesPerPixel(8),
+                    Budget::SamplesPerPixel(8.0),
                     500 + b,
                     |_, _| true,
                 )
@@ -97,7 +96,7 @@ pub fn settings(bootstrap: usize, mutations_per_pixel: f64, seed: u64) -> Metrop
     MetropolisSettings {
         chains: 64,
         bootstrap,
-        budget: Budget::MutationsPerPixel(mutations_per_pixel),
+        budget: Budget::SamplesPerPixel(mutations_per_pixel),
         seed,
         seeding: Seeding::Resample,
     }

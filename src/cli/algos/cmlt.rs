@@ -1,12 +1,24 @@
-//! Options of charted MLT (`--algo cmlt`).
+//! Charted MLT (`--algo cmlt`) and its options.
 
-use super::CliError;
-use super::algo::Common;
-use super::metropolis::MetropolisArgs;
-use super::pathspace::PathSpaceArgs;
+use crate::cli::CliError;
+use crate::cli::registry::{AlgoArgs, Common, Entry};
 use clap::Args;
 use light_transport::cmlt::{Cmlt, CmltSettings, SwapKind};
+use light_transport::renderer::Metropolis;
 use light_transport::scene::Scene;
+
+/// Charted MLT (Pantaleoni 2017).
+pub const ENTRY: Entry = Entry {
+    name: "cmlt",
+    about: "Charted MLT: technique charts with path inversion, chart swaps by serial tempering or replica exchange (--swaps)",
+    unbiased: false,
+    build: |scene, c, a| {
+        Ok(Box::new(Metropolis {
+            method: a.cmlt.cmlt(scene, c, a)?,
+            settings: a.metropolis.settings(),
+        }))
+    },
+};
 
 /// How chart swaps are made.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,25 +54,9 @@ pub struct CmltArgs {
 }
 
 impl CmltArgs {
-    /// The documented defaults (parsed from an empty command line).
-    pub fn default_values() -> Self {
-        #[derive(clap::Parser)]
-        struct Wrapper {
-            #[command(flatten)]
-            c: CmltArgs,
-        }
-        <Wrapper as clap::Parser>::parse_from(["charted"]).c
-    }
-
     /// CMLT on `scene` (runs the technique-energy pilot).
-    pub fn cmlt(
-        &self,
-        scene: &Scene,
-        c: &Common,
-        m: &MetropolisArgs,
-        p: &PathSpaceArgs,
-    ) -> Result<Cmlt, CliError> {
-        let mutations = p.mlt(c, m)?.mutations;
+    pub fn cmlt(&self, scene: &Scene, c: &Common, a: &AlgoArgs) -> Result<Cmlt, CliError> {
+        let m = &a.metropolis;
         let settings = CmltSettings {
             max_edges: c.max_edges,
             importance: m.importance(),
@@ -73,8 +69,7 @@ impl CmltArgs {
             swap_every: self.swap_every,
             ipsm: self.ipsm,
             pathspace: self.pathspace,
-            probabilities: mutations.probabilities,
-            perturbation: mutations.perturbation,
+            mutations: a.pathspace.mutations(c, m, &a.pathspace.mutations)?,
             pilot: self.cmlt_pilot,
         };
         Ok(Cmlt::new(scene, settings)?)

@@ -1,0 +1,100 @@
+//! How Metropolis chains record what they sample (Veach & Guibas 1997 §3.4; charted-MLT paper
+//! §5.4): every proposal deposits its expected value — `a` times the candidate and `1 − a` times
+//! the current state — each weighted by `b / I`, so a chain whose states have density `I / b`
+//! deposits the image. *What* a state deposits is the recorder's business: splats on the film for
+//! the image-space methods, photons at storage points for Metropolis photon sampling.
+//!
+//! The driver gives each group of chains its own [`Sink::Chunk`] per round, fills them in
+//! parallel and hands them to the [`Sink`] in a fixed order, so results do not depend on the
+//! thread count.
+
+use crate::film::{Film, Splat};
+use mcmc_core::kernel::Observer;
+
+/// What a state contributes to the image: splats and the scalar importance `I` the chain samples.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Contribution {
+    /// Raster positions and colours.
+    pub splats: Vec<Splat>,
+    /// The scalar importance (≥ 0).
+    pub importance: f64,
+}
+
+/// A chain state that knows its contribution.
+pub trait Recordable {
+    /// The contribution of the state as last evaluated.
+    fn contribution(&self) -> &Contribution;
+}
+
+/// Receives what chain states deposit.
+pub trait Recorder<S>: Send {
+    /// Deposit `weight` times what `state` contributes (`weight` already includes `b / I`).
+    fn record(&mut self, state: &S, weight: f64);
+}
+
+/// Splats go to a list (the film's recorder).
+impl<S: Recordable> Recorder<S> for Vec<Splat> {
+    #[inline]
+    fn record(&mut self, state: &S, weight: f64) {
+        for &(r, v) in &state.contribution().splats {
+            self.push((r, v * weight));
+        }
+    }
+}
+
+/// The expected-value observer: every proposal deposits `1 − a` times the current state and `a`
+/// times the candidate, each scaled by `b / I` (states of zero or non-finite importance deposit
+/// nothing). Energy redistribution uses it with `b` = its energy quantum over the chain length.
+pub struct ExpectedValue<'a, R> {
+    /// Where deposits go.
+    pub recorder: &'a mut R,
+    /// The normalisation `b`.
+    pub b: f64,
+}
+
+impl<R> ExpectedValue<'_, R> {
+    /// Deposit `w` times the state's contribution, scaled by `b / I`.
+    #[inline]
+    pub fn record<S: Recordable>(&mut self, s: &S, w: f64)
+    where
+        R: Recorder<S>,
+    {
+        let i = s.contribution().importance;
+        if w <= 0.0 || !(i > 0.0) || !i.is_finite() {
+            return;
+        }
+        self.recorder.record(s, w * self.b / i);
+    }
+}
+
+impl<S: Recordable, R: Recorder<S>> Observer<S> for ExpectedValue<'_, R> {
+    #[inline]
+    fn observe(&mut self, current: &S, proposed: &S, a: f64, _kind: usize) {
+        self.record(current, 1.0 - a);
+        self.record(proposed, a);
+    }
+}
+
+/// Where the driver puts what the chains record, round by round.
+pub trait Sink<S>: Send {
+    /// A recorder for one group of chains in one round.
+    type Chunk: Recorder<S> + Default + Send;
+    /// Absorb a chunk (called in chunk order).
+    fn absorb(&mut self, chunk: Self::Chunk);
+    /// The chains have made `mutations` mutations in all, on an image of `pixels` pixels.
+    fn mutations_done(&mut self, mutations: u64, pixels: f64);
+}
+
+impl<S: Recordable> Sink<S> for Film {
+    type Chunk = Vec<Splat>;
+
+    fn absorb(&mut self, chunk: Vec<Splat>) {
+        for (r, v) in chunk {
+            self.add_splat(r, v);
+        }
+    }
+
+    fn mutations_done(&mut self, mutations: u64, pixels: f64) {
+        self.splat_scale = mutations as f64 / pixels;
+    }
+}

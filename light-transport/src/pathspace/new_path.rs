@@ -1,0 +1,152 @@
+//! The new-path mutation (practical-MLT paper §3.2), an independence sampler that keeps the chain
+//! ergodic, and the bootstrap sampler of path-space MLT: a whole new path by one bidirectional
+//! strategy — length `k` with probability `P_len(k)`, then `s` uniform in `0 … k` — with
+//! `T(ȳ) = P_len(k') / (k' + 1) · Σ_s p_s(ȳ)`. Nothing is kept (record `(−1, k + 1, k' + 1)`),
+//! so in the common measure `T̃ = P_len(k') / (k' + 1) · Σ_s 1/I(C*_s(ȳ))`.
+
+use super::mutation::{Change, Mutation, Registration};
+use super::state::PathState;
+use super::walk::sample_path;
+use crate::metropolis::ImportanceKind;
+use crate::sampler::{IndependentStream, SampleStream, TECHNIQUE_STREAM};
+use crate::scene::Scene;
+use mcmc_core::rng::{categorical, uniform, uniform_index};
+use mcmc_core::{ChainRng, Failure};
+
+const NEW_PATH_STREAM: u64 = 0x4e57_9a7f;
+
+/// The registration of the new-path mutation.
+pub const REGISTRATION: Registration = Registration {
+    name: "new-path",
+    default_weight: 0.1,
+    build: |c| {
+        Box::new(NewPathMutation {
+            new_path: c.settings.new_path.clone(),
+            scene: c.scene,
+            importance: c.settings.importance,
+        })
+    },
+};
+
+/// The length distribution of new paths.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NewPath {
+    /// `P_len(k)` for `k = 1 … max_edges` (index `k − 1`), summing to 1.
+    pub length_probability: Vec<f64>,
+}
+
+impl NewPath {
+    /// Uniform lengths up to `max_edges`.
+    pub fn uniform(max_edges: usize) -> Self {
+        Self {
+            length_probability: vec![1.0 / max_edges.max(1) as f64; max_edges.max(1)],
+        }
+    }
+
+    /// Only paths of `k` edges (`1 ≤ k ≤ max_edges`).
+    pub fn only(k: usize, max_edges: usize) -> Self {
+        let mut length_probability = vec![0.0; max_edges.max(k)];
+        length_probability[k - 1] = 1.0;
+        Self { length_probability }
+    }
+
+    /// Lengths in proportion to the energy `b_k` of each length, mixed with 20% uniform so that
+    /// every length stays reachable.
+    pub fn from_energies(energies: &[f64]) -> Self {
+        let n = energies.len().max(1);
+        let total: f64 = energies.iter().filter(|e| e.is_finite()).sum();
+        if !(total > 0.0) {
+            return Self::uniform(n);
+        }
+        Self {
+            length_probability: energies
+                .iter()
+                .map(|&e| {
+                    let e = if e.is_finite() && e > 0.0 { e } else { 0.0 };
+                    0.8 * e / total + 0.2 / n as f64
+                })
+                .collect(),
+        }
+    }
+
+    /// `P_len(k)`.
+    pub fn probability(&self, k: usize) -> f64 {
+        k.checked_sub(1)
+            .and_then(|i| self.length_probability.get(i))
+            .copied()
+            .unwrap_or(0.0)
+    }
+
+    /// A path of `k` edges from the numbers of `stream` (strategy from the technique stream),
+    /// evaluated; `false` (and a cleared state) when it carries no light. Deterministic in the
+    /// stream. Its importance weight within its length is `(k + 1) I(f / Σ_s p_s)`.
+    pub fn sample<S: SampleStream>(
+        scene: &Scene,
+        importance: ImportanceKind,
+        k: usize,
+        stream: &mut S,
+        out: &mut PathState,
+    ) -> bool {
+        stream.start_stream(TECHNIQUE_STREAM);
+        let s = uniform_index(stream.next_1d(), k + 1);
+        let mut buffers = (Vec::new(), Vec::new());
+        if sample_path(scene, k, s, stream, &mut buffers, out).is_none() {
+            out.path.vertices.clear();
+            out.discard();
+            return false;
+        }
+        out.evaluate(scene, importance, 1.0)
+    }
+
+    /// `ln T̃(ȳ)`: `ln(P_len(k') / (k' + 1) · Σ_s 1/I(C*_s(ȳ)))`.
+    pub fn ln_density(&self, y: &PathState) -> f64 {
+        let k = y.path.edges();
+        let w = self.probability(k) / (k + 1) as f64 * y.inverse_sum(0, k + 1);
+        if w > 0.0 { w.ln() } else { f64::NEG_INFINITY }
+    }
+}
+
+/// The new-path mutation on a scene.
+struct NewPathMutation<'a> {
+    new_path: NewPath,
+    scene: &'a Scene,
+    importance: ImportanceKind,
+}
+
+impl Mutation for NewPathMutation<'_> {
+    fn name(&self) -> &'static str {
+        REGISTRATION.name
+    }
+
+    fn suitability(&self, _: &PathState) -> f64 {
+        1.0
+    }
+
+    fn propose(&self, x: &PathState, rng: &mut ChainRng, y: &mut PathState) -> Result<(), Failure> {
+        let lengths = &self.new_path.length_probability;
+        let k = categorical(lengths, uniform(rng)).map_or(lengths.len(), |i| i + 1);
+        let mut stream = IndependentStream::new(mcmc_core::rng::stream(
+            rand::Rng::next_u64(rng),
+            NEW_PATH_STREAM,
+        ));
+        NewPath::sample(self.scene, self.importance, k, &mut stream, y);
+        y.change = Some(Change {
+            l: -1,
+            m: x.path.edges() + 1,
+            added: k + 1,
+        });
+        Ok(())
+    }
+
+    fn ln_density(&self, x: &PathState, y: &PathState, c: Change) -> f64 {
+        let whole = Change {
+            l: -1,
+            m: x.path.edges() + 1,
+            added: y.path.edges() + 1,
+        };
+        if c != whole {
+            return f64::NEG_INFINITY;
+        }
+        self.new_path.ln_density(y)
+    }
+}

@@ -1,0 +1,23 @@
+//! Energy redistribution path tracing.
+
+use crate::cli::registry::Entry;
+use light_transport::pathspace::{Erpt, ErptSettings};
+use light_transport::renderer::Passes;
+
+/// ERPT (Cline, Talbot & Egbert 2005).
+pub const ENTRY: Entry = Entry {
+    name: "erpt",
+    about: "Energy redistribution path tracing (Cline et al.): short perturbation chains from path-traced seeds",
+    unbiased: true,
+    build: |scene, c, a| {
+        let p = &a.pathspace;
+        let mut settings = ErptSettings::new(c.max_edges);
+        settings.mutations = p.mutations(c, &a.metropolis, &p.erpt_mutations)?;
+        settings.chain_length = p.erpt_chain_length;
+        settings.chains_per_seed = p.erpt_chains;
+        Ok(Box::new(Passes {
+            estimator: Erpt::new(scene, settings)?,
+            details: Erpt::summary,
+        }))
+    },
+};

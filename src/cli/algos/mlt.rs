@@ -1,0 +1,21 @@
+//! Path-space MLT.
+
+use crate::cli::registry::Entry;
+use light_transport::pathspace::PathMlt;
+use light_transport::renderer::Metropolis;
+
+/// Path-space MLT (Veach & Guibas 1997).
+pub const ENTRY: Entry = Entry {
+    name: "mlt",
+    about: "Path-space MLT (Veach & Guibas): bidirectional, lens-subpath, perturbation and new-path mutations",
+    unbiased: false,
+    build: |_, c, a| {
+        let mutations = a
+            .pathspace
+            .mutations(c, &a.metropolis, &a.pathspace.mutations)?;
+        Ok(Box::new(Metropolis {
+            method: PathMlt::new(mutations)?,
+            settings: a.metropolis.settings(),
+        }))
+    },
+};

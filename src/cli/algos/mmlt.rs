@@ -1,0 +1,27 @@
+//! Multiplexed MLT.
+
+use crate::cli::registry::Entry;
+use light_transport::metropolis::Mmlt;
+use light_transport::path::WalkSettings;
+use light_transport::renderer::Metropolis;
+
+/// Multiplexed MLT (Hachisuka, Kaplanyan & Dachsbacher 2014).
+pub const ENTRY: Entry = Entry {
+    name: "mmlt",
+    about: "Multiplexed MLT (Hachisuka et al.): one strategy per sample, chains per path length",
+    unbiased: false,
+    build: |_, c, a| {
+        let m = &a.metropolis;
+        Ok(Box::new(Metropolis {
+            method: Mmlt {
+                walk: WalkSettings {
+                    max_edges: c.max_edges,
+                },
+                heuristic: c.heuristic,
+                kelemen: m.kelemen()?,
+                importance: m.importance(),
+            },
+            settings: m.settings(),
+        }))
+    },
+};

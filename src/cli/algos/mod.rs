@@ -1,0 +1,10 @@
+//! One file per algorithm: its registry entry and how it is built from the options.
+
+pub mod bdpt;
+pub mod cmlt;
+pub mod erpt;
+pub mod lt;
+pub mod mlt;
+pub mod mmlt;
+pub mod pssmlt;
+pub mod pt;

@@ -1,0 +1,23 @@
+//! Primary-sample-space MLT.
+
+use crate::cli::registry::Entry;
+use light_transport::metropolis::Pssmlt;
+use light_transport::renderer::Metropolis;
+
+/// PSSMLT (Kelemen et al. 2002) on BDPT with all connections.
+pub const ENTRY: Entry = Entry {
+    name: "pssmlt",
+    about: "Primary-sample-space MLT (Kelemen) on BDPT with all connections",
+    unbiased: false,
+    build: |_, c, a| {
+        let m = &a.metropolis;
+        Ok(Box::new(Metropolis {
+            method: Pssmlt {
+                bdpt: super::bdpt::bdpt(c),
+                kelemen: m.kelemen()?,
+                importance: m.importance(),
+            },
+            settings: m.settings(),
+        }))
+    },
+};

@@ -1,0 +1,53 @@
+//! Options every rendering command shares: seed, path length, resolution, exposure, MIS.
+
+use super::registry::Common;
+use clap::ValueEnum;
+use light_transport::path::MisHeuristic;
+
+/// Options every rendering command shares.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RenderOptions {
+    /// Master seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Maximum number of bounces (pbrt's maxdepth; paths have at most maxdepth + 1 edges).
+    #[arg(long, default_value_t = 8)]
+    pub max_depth: usize,
+    /// Override the image size, e.g. 320x240.
+    #[arg(long, value_parser = super::scene_arg::parse_resolution)]
+    pub resolution: Option<(usize, usize)>,
+    /// PNG exposure in stops.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f64,
+    /// MIS heuristic.
+    #[arg(long, value_enum, default_value_t = Heuristic::Power)]
+    pub mis: Heuristic,
+}
+
+impl RenderOptions {
+    /// The integrator options they imply.
+    pub fn common(&self) -> Common {
+        Common {
+            max_edges: self.max_depth + 1,
+            heuristic: self.mis.into(),
+        }
+    }
+}
+
+/// MIS heuristic option.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Heuristic {
+    /// Balance heuristic.
+    Balance,
+    /// Power heuristic (β = 2).
+    Power,
+}
+
+impl From<Heuristic> for MisHeuristic {
+    fn from(h: Heuristic) -> Self {
+        match h {
+            Heuristic::Balance => MisHeuristic::Balance,
+            Heuristic::Power => MisHeuristic::Power,
+        }
+    }
+}
