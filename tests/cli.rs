@@ -253,3 +253,105 @@ fn bad_input_gives_clear_errors() {
     }
     let _ = std::fs::remove_dir_all(Path::new(&d));
 }
+
+/// Send `signal` (a `kill` name) to a process.
+fn signal(pid: u32, name: &str) {
+    let ok = Command::new("kill")
+        .args([&format!("-{name}"), &pid.to_string()])
+        .status()
+        .expect("kill runs")
+        .success();
+    assert!(ok, "kill -{name} {pid} failed");
+}
+
+/// The first SIGINT (or SIGTERM) stops a long render at the end of its pass or round: it writes
+/// the EXR, PNG and sidecar with the samples actually taken, prints its summary and exits with
+/// status 130, well before its time budget.
+#[test]
+fn an_interrupt_keeps_the_work() {
+    let d = tmp("interrupt");
+    for (algo, sig) in [("bdpt", "INT"), ("mlt", "TERM")] {
+        let exr = d.join(format!("{algo}.exr"));
+        let start = std::time::Instant::now();
+        let child = charted()
+            .args([
+                "render",
+                "door",
+                "--algo",
+                algo,
+                "--time",
+                "120s",
+                "--resolution",
+                "64x48",
+                "--bootstrap",
+                "4000",
+                "--chains",
+                "64",
+                "--quiet",
+                "-o",
+            ])
+            .arg(&exr)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("the binary runs");
+        std::thread::sleep(std::time::Duration::from_secs(3));
+        signal(child.id(), sig);
+        let out = child.wait_with_output().expect("the render ends");
+        let secs = start.elapsed().as_secs_f64();
+        let (stdout, stderr) = (
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr),
+        );
+        assert_eq!(out.status.code(), Some(130), "{algo}: {stdout}{stderr}");
+        assert!(secs < 60.0, "{algo}: took {secs:.1} s after the signal");
+        assert!(stdout.contains("(interrupted)"), "{algo}: {stdout}");
+        assert!(exr.exists() && exr.with_extension("png").exists());
+        let sidecar = std::fs::read_to_string(format!("{}.samples", exr.display())).unwrap();
+        let samples: f64 = sidecar
+            .lines()
+            .find_map(|l| l.strip_prefix("samples="))
+            .and_then(|v| v.parse().ok())
+            .unwrap();
+        assert!(samples > 0.0, "{algo}: {sidecar}");
+        println!(
+            "{algo}: SIG{sig} after 3 s, exited after {secs:.1} s with {samples} samples per pixel"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A second signal quits at once, without waiting for the pass to end: on a 1024×768 image a
+/// BDPT pass takes several seconds, and the process is gone well before, having written nothing.
+#[test]
+fn a_second_interrupt_quits_at_once() {
+    let d = tmp("interrupt2");
+    let exr = d.join("b.exr");
+    let start = std::time::Instant::now();
+    let child = charted()
+        .args([
+            "render",
+            "door",
+            "--time",
+            "120s",
+            "--resolution",
+            "1024x768",
+            "--quiet",
+            "-o",
+        ])
+        .arg(&exr)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    signal(child.id(), "INT");
+    std::thread::sleep(std::time::Duration::from_millis(100));
+    signal(child.id(), "INT");
+    let out = child.wait_with_output().expect("the render ends");
+    let secs = start.elapsed().as_secs_f64();
+    assert_eq!(out.status.code(), Some(130));
+    assert!(secs < 3.0, "took {secs:.1} s");
+    assert!(!exr.exists(), "the first pass was finished and written");
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -175,6 +175,9 @@ impl<X: Clone, I: Integrand<X>, C: Chart<X>> Family<ChartState<X>> for ChartedTa
                     f64::NEG_INFINITY
                 }
             }
+            // A point of zero integrand, or outside the level's image, has density zero there
+            // (not the NaN `−∞ − (−∞)` would give).
+            _ if s.importance == 0.0 || s.ln_p[level] == f64::NEG_INFINITY => f64::NEG_INFINITY,
             _ => self.ln_target_space_density(level, s) - s.ln_p[level],
         }
     }
