@@ -16,10 +16,14 @@
 //! The Russian-roulette number is read only when roulette is enabled; otherwise it is a free
 //! coordinate (inverses fill it uniformly). Numbers are always consumed block by block so that the
 //! `i`-th vertex always reads the same positions: this is what lets Kelemen mutations perturb a
-//! vertex in place and lets path inversion write a vertex's numbers back.
+//! vertex in place and lets path inversion write a vertex's numbers back. [`layout`] names every
+//! position; the walks, the integrators and the chart inverses all use it, and nothing else
+//! spells out an offset.
 //!
 //! Implementations: [`IndependentStream`] (fresh random numbers), [`ReplayStream`] (a given vector
-//! per substream — chart forward maps), and [`Recorder`] (wraps a stream and keeps what was read).
+//! per substream — chart forward maps), [`Recorder`] (wraps a stream and keeps what was read), and
+//! [`SliceStream`] (a writable stream over given vectors, where inverses [`WritableStream::put`]
+//! the numbers of a path back in the layout).
 
 use mcmc_core::ChainRng;
 use mcmc_core::rng::uniform;
@@ -38,6 +42,63 @@ pub const VERTEX_BLOCK: usize = 4;
 pub const CAMERA_BLOCK: usize = 4;
 /// Numbers of the light endpoint.
 pub const LIGHT_BLOCK: usize = 5;
+
+/// Where every number lives (see the table above).
+pub mod layout {
+    use super::{CAMERA_BLOCK, LIGHT_BLOCK, VERTEX_BLOCK};
+
+    /// Camera endpoint block: the film position (2 numbers).
+    pub const FILM: usize = 0;
+    /// Camera endpoint block: the lens position (2 numbers).
+    pub const LENS: usize = 2;
+    /// Light endpoint block: the choice of light (1 number).
+    pub const LIGHT_CHOICE: usize = 0;
+    /// Light endpoint block: the position on the light (2 numbers).
+    pub const LIGHT_POSITION: usize = 1;
+    /// Light endpoint block: the emitted direction (2 numbers).
+    pub const LIGHT_DIRECTION: usize = 3;
+    /// Vertex block: the lobe choice (1 number).
+    pub const LOBE: usize = 0;
+    /// Vertex block: the direction (2 numbers).
+    pub const DIRECTION: usize = 1;
+    /// Vertex block: Russian roulette (1 number).
+    pub const ROULETTE: usize = 3;
+    /// Technique substream: the technique (MMLT) or strategy (new paths) choice.
+    pub const TECHNIQUE: usize = 0;
+
+    /// Start of the block read when leaving the `b`-th vertex (`b ≥ 1`) of a subpath whose
+    /// endpoint block has `endpoint` numbers.
+    #[inline]
+    pub fn vertex(endpoint: usize, b: usize) -> usize {
+        endpoint + (b - 1) * VERTEX_BLOCK
+    }
+
+    /// [`vertex`] of a camera subpath.
+    #[inline]
+    pub fn camera_vertex(b: usize) -> usize {
+        vertex(CAMERA_BLOCK, b)
+    }
+
+    /// [`vertex`] of a light subpath.
+    #[inline]
+    pub fn light_vertex(b: usize) -> usize {
+        vertex(LIGHT_BLOCK, b)
+    }
+
+    /// Numbers a camera subpath of `t` vertices reads (its last vertex scatters nothing).
+    pub fn camera_numbers(t: usize) -> usize {
+        CAMERA_BLOCK + VERTEX_BLOCK * t.saturating_sub(2)
+    }
+
+    /// Numbers a light subpath of `s` vertices reads.
+    pub fn light_numbers(s: usize) -> usize {
+        if s == 0 {
+            0
+        } else {
+            LIGHT_BLOCK + VERTEX_BLOCK * s.saturating_sub(2)
+        }
+    }
+}
 
 /// A source of numbers in `[0, 1)` organised in substreams.
 pub trait SampleStream {
@@ -117,9 +178,9 @@ impl SampleStream for IndependentStream {
     }
 }
 
-/// Replays given vectors, one per substream. Reading past the end of a vector returns a fresh
-/// number from the fallback generator and marks the stream as *exhausted* (a fixed-dimension chart
-/// forward map must never do that; [`ReplayStream::exhausted`] reports it).
+/// Replays given vectors, one per substream. Reading past the end of a vector returns 0.5 and
+/// marks the stream as *exhausted* (a fixed-dimension chart forward map must never do that;
+/// [`ReplayStream::exhausted`] reports it).
 #[derive(Clone, Debug)]
 pub struct ReplayStream<'a> {
     data: [&'a [f64]; STREAMS],
@@ -165,6 +226,79 @@ impl SampleStream for ReplayStream<'_> {
     }
     fn position(&self) -> usize {
         self.pos[self.current]
+    }
+}
+
+/// A stream that can also be written: inverses put the numbers of a path back where the walk
+/// would read them.
+pub trait WritableStream: SampleStream {
+    /// Write `v` at the current position of the current substream and advance.
+    fn put(&mut self, v: f64);
+    /// Write two numbers.
+    fn put_2d(&mut self, v: [f64; 2]) {
+        self.put(v[0]);
+        self.put(v[1]);
+    }
+}
+
+/// Readable and writable vectors, one per substream (the technique substream is empty): the
+/// primary numbers of a technique chart, camera numbers then light numbers. Writing or reading
+/// past the end of a vector marks the stream as overflowed ([`SliceStream::overflowed`]).
+#[derive(Debug)]
+pub struct SliceStream<'a> {
+    data: [&'a mut [f64]; 2],
+    current: usize,
+    pos: [usize; STREAMS],
+    overflowed: bool,
+}
+
+impl<'a> SliceStream<'a> {
+    /// Read and write `camera` and `light` numbers.
+    pub fn new(camera: &'a mut [f64], light: &'a mut [f64]) -> Self {
+        Self {
+            data: [camera, light],
+            current: 0,
+            pos: [0; STREAMS],
+            overflowed: false,
+        }
+    }
+
+    /// Whether a read or write fell outside its vector.
+    pub fn overflowed(&self) -> bool {
+        self.overflowed
+    }
+
+    fn slot(&mut self) -> Option<&mut f64> {
+        let i = self.pos[self.current];
+        self.pos[self.current] += 1;
+        let slot = self.data.get_mut(self.current).and_then(|d| d.get_mut(i));
+        if slot.is_none() {
+            self.overflowed = true;
+        }
+        slot
+    }
+}
+
+impl SampleStream for SliceStream<'_> {
+    fn start_stream(&mut self, index: usize) {
+        self.current = index;
+    }
+    fn next_1d(&mut self) -> f64 {
+        self.slot().map_or(0.5, |v| *v)
+    }
+    fn seek(&mut self, index: usize) {
+        self.pos[self.current] = index;
+    }
+    fn position(&self) -> usize {
+        self.pos[self.current]
+    }
+}
+
+impl WritableStream for SliceStream<'_> {
+    fn put(&mut self, v: f64) {
+        if let Some(slot) = self.slot() {
+            *slot = v;
+        }
     }
 }
 
@@ -239,6 +373,26 @@ mod tests {
         assert!(!replay.exhausted());
         replay.next_1d();
         assert!(replay.exhausted());
+    }
+
+    #[test]
+    fn numbers_put_in_the_layout_are_read_back_there() {
+        let (mut cam, mut light) = (vec![0.0; layout::camera_numbers(4)], vec![0.0; 5]);
+        let mut w = SliceStream::new(&mut cam, &mut light);
+        w.start_stream(CAMERA_STREAM);
+        w.seek(layout::camera_vertex(2) + layout::DIRECTION);
+        w.put_2d([0.25, 0.75]);
+        w.start_stream(LIGHT_STREAM);
+        w.seek(layout::LIGHT_DIRECTION);
+        w.put(0.5);
+        assert!(!w.overflowed());
+        w.put_2d([0.1, 0.2]);
+        assert!(w.overflowed(), "the light block has 5 numbers");
+        assert_eq!(cam[CAMERA_BLOCK + VERTEX_BLOCK + 1..][..2], [0.25, 0.75]);
+        let mut r = ReplayStream::new(&cam, &light, &[]);
+        r.seek(layout::camera_vertex(2));
+        assert_eq!(r.next_1d(), 0.0);
+        assert_eq!(r.next_2d(), [0.25, 0.75]);
     }
 
     #[test]

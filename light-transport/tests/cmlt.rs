@@ -292,12 +292,7 @@ impl Method for ExchangeWithoutRatio {
             assert!(atlas.inverse_from(i, &y.x, j, &y.u, &mut ua, rng));
             assert!(atlas.inverse_from(j, &x.x, i, &x.u, &mut ub, rng));
             // Missing: accept with min(1, p_i(x̄₂) p_j(x̄₁) / (p_i(x̄₁) p_j(x̄₂))).
-            let (lo, hi) = chains.split_at_mut(a.max(b));
-            let (ca, cb) = if a < b {
-                (&mut lo[a], &mut hi[0])
-            } else {
-                (&mut hi[0], &mut lo[b])
-            };
+            let (ca, cb) = light_transport::cmlt::replica::pair_mut(chains, a, b);
             mcmc_charts::moves::Exchange::Accepted(1.0, ua, ub).apply(&mut ca.state, &mut cb.state);
             std::mem::swap(&mut ca.ln_density, &mut cb.ln_density);
         }

@@ -207,7 +207,7 @@ fn homogeneity(a: &[usize], b: &[usize], cells: usize) -> (f64, usize) {
 }
 
 fn uniformity(inverted: &[Vec<f64>], reference: &[Vec<f64>], d: usize, alpha: f64) -> CheckReport {
-    let bin = |v: f64, b: usize| ((v * b as f64) as usize).min(b - 1);
+    let bin = |v: f64, b: usize| mcmc_core::rng::uniform_index(v, b);
     let mut tests: Vec<(String, f64)> = Vec::new();
     for i in 0..d {
         let a: Vec<usize> = inverted.iter().map(|u| bin(u[i], 32)).collect();

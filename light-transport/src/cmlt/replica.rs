@@ -101,12 +101,7 @@ impl Cmlt {
             })
             .collect();
         for ((a, b), outcome) in pairs.into_iter().zip(outcomes) {
-            let (lo, hi) = chains.split_at_mut(a.max(b));
-            let (ca, cb) = if a < b {
-                (&mut lo[a], &mut hi[0])
-            } else {
-                (&mut hi[0], &mut lo[b])
-            };
+            let (ca, cb) = pair_mut(chains, a, b);
             match outcome {
                 Exchange::Accepted(p, ..) => {
                     ca.stats.record(SWAP, p, true, false);
@@ -123,5 +118,16 @@ impl Cmlt {
                 Exchange::Failed => ca.stats.record_failure(SWAP, Failure::Failed),
             }
         }
+    }
+}
+
+/// Mutable references to two distinct elements `a ≠ b` of a slice.
+pub fn pair_mut<T>(v: &mut [T], a: usize, b: usize) -> (&mut T, &mut T) {
+    assert_ne!(a, b, "a pair of one element");
+    let (lo, hi) = v.split_at_mut(a.max(b));
+    if a < b {
+        (&mut lo[a], &mut hi[0])
+    } else {
+        (&mut hi[0], &mut lo[b])
     }
 }

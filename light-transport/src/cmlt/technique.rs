@@ -21,7 +21,10 @@ use crate::metropolis::ImportanceKind;
 use crate::path::{Vertex, VertexKind};
 use crate::pathspace::PathState;
 use crate::pathspace::walk::sample_path;
-use crate::sampler::{CAMERA_BLOCK, LIGHT_BLOCK, ReplayStream, VERTEX_BLOCK};
+use crate::sampler::{
+    CAMERA_STREAM, LIGHT_STREAM, ReplayStream, SampleStream, SliceStream, VERTEX_BLOCK,
+    WritableStream, layout,
+};
 use crate::scene::Scene;
 use mcmc_charts::Chart;
 use mcmc_core::ChainRng;
@@ -46,17 +49,26 @@ pub struct TechniqueChart<'a> {
     pub importance: ImportanceKind,
 }
 
-/// Numbers of a camera subpath of `t` vertices.
-pub fn camera_numbers(t: usize) -> usize {
-    CAMERA_BLOCK + VERTEX_BLOCK * t.saturating_sub(2)
+pub use crate::sampler::layout::{camera_numbers, light_numbers};
+
+/// The numbers of another chart of the same path, for the partial inverse: its camera and light
+/// vertex counts and its numbers (camera part, light part).
+struct Old<'a> {
+    t: usize,
+    s: usize,
+    numbers: ReplayStream<'a>,
 }
 
-/// Numbers of a light subpath of `s` vertices.
-pub fn light_numbers(s: usize) -> usize {
-    if s == 0 {
-        0
-    } else {
-        LIGHT_BLOCK + VERTEX_BLOCK * s.saturating_sub(2)
+impl Old<'_> {
+    /// Copy `n` numbers from position `at` of substream `stream` of the old chart into `w`.
+    fn copy(&mut self, w: &mut SliceStream<'_>, stream: usize, at: usize, n: usize) {
+        self.numbers.start_stream(stream);
+        self.numbers.seek(at);
+        w.start_stream(stream);
+        w.seek(at);
+        for _ in 0..n {
+            w.put(self.numbers.next_1d());
+        }
     }
 }
 
@@ -77,12 +89,13 @@ impl<'a> TechniqueChart<'a> {
     }
 
     /// Write the numbers of the scattering vertex `v` (reached from `prev`, leaving toward
-    /// `next`) into `out` (one vertex block).
+    /// `next`) into its block, which starts at `block` of `w`'s current substream.
     fn invert_scattering(
         v: &Vertex,
         prev: &Vertex,
         next: &Vertex,
-        out: &mut [f64],
+        w: &mut SliceStream<'_>,
+        block: usize,
         rng: &mut ChainRng,
     ) -> bool {
         let Some(b) = v.bsdf.as_ref() else {
@@ -93,81 +106,84 @@ impl<'a> TechniqueChart<'a> {
         let Some([l, u0, u1]) = b.invert(wo, wi, v.delta, rng) else {
             return false;
         };
-        out[0] = l;
-        out[1] = u0;
-        out[2] = u1;
-        out[3] = uniform(rng);
+        w.seek(block + layout::LOBE);
+        w.put(l);
+        w.seek(block + layout::DIRECTION);
+        w.put_2d([u0, u1]);
+        w.seek(block + layout::ROULETTE);
+        w.put(uniform(rng));
         true
     }
 
-    /// The camera numbers of path `x` (camera vertices `v_k, v_{k−1}, …`). With `old` (the camera
-    /// vertex count and camera numbers of another chart at the same path), numbers whose
-    /// conditional law is the same in both charts are kept and only the others are drawn.
+    /// Write the camera numbers of path `x` (camera vertices `v_k, v_{k−1}, …`). With `old`
+    /// (another chart at the same path), numbers whose conditional law is the same in both
+    /// charts are kept and only the others are drawn.
     fn invert_camera(
         &self,
         x: &PathState,
-        out: &mut [f64],
+        w: &mut SliceStream<'_>,
         rng: &mut ChainRng,
-        old: Option<(usize, &[f64])>,
+        mut old: Option<&mut Old<'_>>,
     ) -> bool {
         let v = &x.path.vertices;
         let (k, t) = (self.k, self.t());
         let lens = &v[k];
         let cam = &self.scene.camera;
         let free = [uniform(rng), uniform(rng)];
-        let keep_endpoint = old.is_some_and(|(t_old, _)| t_old >= 2 && t >= 2);
-        let (film, lens_u) = if let (true, Some((_, o))) = (keep_endpoint, old) {
-            ([o[0], o[1]], [o[2], o[3]])
-        } else if t >= 2 {
-            let w = (v[k - 1].p() - lens.p()).normalize_or_zero();
-            match cam.invert(lens.p(), w, free) {
-                Some(r) => r,
-                None => return false,
-            }
+        let keep_endpoint = old.as_ref().is_some_and(|o| o.t >= 2 && t >= 2);
+        if let (true, Some(o)) = (keep_endpoint, old.as_deref_mut()) {
+            o.copy(w, CAMERA_STREAM, layout::FILM, 4);
         } else {
-            (
-                [uniform(rng), uniform(rng)],
-                cam.invert_lens(lens.p(), free),
-            )
-        };
-        out[..4].copy_from_slice(&[film[0], film[1], lens_u[0], lens_u[1]]);
+            let (film, lens_u) = if t >= 2 {
+                let d = (v[k - 1].p() - lens.p()).normalize_or_zero();
+                match cam.invert(lens.p(), d, free) {
+                    Some(r) => r,
+                    None => return false,
+                }
+            } else {
+                (
+                    [uniform(rng), uniform(rng)],
+                    cam.invert_lens(lens.p(), free),
+                )
+            };
+            w.start_stream(CAMERA_STREAM);
+            w.seek(layout::FILM);
+            w.put_2d(film);
+            w.seek(layout::LENS);
+            w.put_2d(lens_u);
+        }
         // Camera vertex b (1 ≤ b ≤ t − 2) is path vertex k − b.
         for b in 1..t.saturating_sub(1) {
-            let at = CAMERA_BLOCK + (b - 1) * VERTEX_BLOCK;
-            if let Some((t_old, o)) = old
-                && b + 2 <= t_old
+            let block = layout::camera_vertex(b);
+            if let Some(o) = old.as_deref_mut()
+                && b + 2 <= o.t
             {
-                out[at..at + VERTEX_BLOCK].copy_from_slice(&o[at..at + VERTEX_BLOCK]);
+                o.copy(w, CAMERA_STREAM, block, VERTEX_BLOCK);
                 continue;
             }
             let i = k - b;
-            if !Self::invert_scattering(
-                &v[i],
-                &v[i + 1],
-                &v[i - 1],
-                &mut out[at..at + VERTEX_BLOCK],
-                rng,
-            ) {
+            w.start_stream(CAMERA_STREAM);
+            if !Self::invert_scattering(&v[i], &v[i + 1], &v[i - 1], w, block, rng) {
                 return false;
             }
         }
         true
     }
 
-    /// The light numbers of path `x` (light vertices `v_0, v_1, …`); `old` as for
-    /// [`TechniqueChart::invert_camera`], with the light vertex count and light numbers.
+    /// Write the light numbers of path `x` (light vertices `v_0, v_1, …`); `old` as for
+    /// [`TechniqueChart::invert_camera`].
     fn invert_light(
         &self,
         x: &PathState,
-        out: &mut [f64],
+        w: &mut SliceStream<'_>,
         rng: &mut ChainRng,
-        old: Option<(usize, &[f64])>,
+        old: Option<&mut Old<'_>>,
     ) -> bool {
         let s = self.s;
         if s == 0 {
             return true;
         }
-        let old = old.filter(|(s_old, _)| *s_old >= 1);
+        let mut old = old.filter(|o| o.s >= 1);
         let v = &x.path.vertices;
         let VertexKind::Light { light } = v[0].kind else {
             return false;
@@ -177,54 +193,69 @@ impl<'a> TechniqueChart<'a> {
         let free = [uniform(rng), uniform(rng), uniform(rng), uniform(rng)];
         // Light choice and position have the same conditional law in every chart with s ≥ 1; the
         // emitted direction is determined for s ≥ 2 and free for s = 1.
-        let keep_dir = old.is_some_and(|(s_old, _)| (s_old >= 2) == (s >= 2));
-        if let Some((_, o)) = old {
-            out[..3].copy_from_slice(&o[..3]);
+        let keep_dir = old.as_ref().is_some_and(|o| (o.s >= 2) == (s >= 2));
+        if let Some(o) = old.as_deref_mut() {
+            o.copy(w, LIGHT_STREAM, layout::LIGHT_CHOICE, 1);
+            o.copy(w, LIGHT_STREAM, layout::LIGHT_POSITION, 2);
             if keep_dir {
-                out[3..5].copy_from_slice(&o[3..5]);
+                o.copy(w, LIGHT_STREAM, layout::LIGHT_DIRECTION, 2);
             }
         }
         if !keep_dir {
+            w.start_stream(LIGHT_STREAM);
             if old.is_none() {
-                out[0] = scene.light_distribution.invert(li, uniform(rng));
+                w.seek(layout::LIGHT_CHOICE);
+                w.put(scene.light_distribution.invert(li, uniform(rng)));
             }
             let l = &scene.lights[li];
-            let w = if s >= 2 {
+            let d = if s >= 2 {
                 (v[1].p() - v[0].p()).normalize_or_zero()
             } else {
                 v[0].n()
             };
-            let Some((u_pos, u_dir)) = l.invert_emission(&scene.bvh.primitives, v[0].p(), w, free)
+            let Some((u_pos, u_dir)) = l.invert_emission(&scene.bvh.primitives, v[0].p(), d, free)
             else {
                 return false;
             };
             if old.is_none() {
-                out[1] = u_pos[0];
-                out[2] = u_pos[1];
+                w.seek(layout::LIGHT_POSITION);
+                w.put_2d(u_pos);
             }
-            let u_dir = if s >= 2 { u_dir } else { [free[2], free[3]] };
-            out[3] = u_dir[0];
-            out[4] = u_dir[1];
+            w.seek(layout::LIGHT_DIRECTION);
+            w.put_2d(if s >= 2 { u_dir } else { [free[2], free[3]] });
         }
         for b in 1..s.saturating_sub(1) {
-            let at = LIGHT_BLOCK + (b - 1) * VERTEX_BLOCK;
-            if let Some((s_old, o)) = old
-                && b + 2 <= s_old
+            let block = layout::light_vertex(b);
+            if let Some(o) = old.as_deref_mut()
+                && b + 2 <= o.s
             {
-                out[at..at + VERTEX_BLOCK].copy_from_slice(&o[at..at + VERTEX_BLOCK]);
+                o.copy(w, LIGHT_STREAM, block, VERTEX_BLOCK);
                 continue;
             }
-            if !Self::invert_scattering(
-                &v[b],
-                &v[b - 1],
-                &v[b + 1],
-                &mut out[at..at + VERTEX_BLOCK],
-                rng,
-            ) {
+            w.start_stream(LIGHT_STREAM);
+            if !Self::invert_scattering(&v[b], &v[b - 1], &v[b + 1], w, block, rng) {
                 return false;
             }
         }
         true
+    }
+
+    /// Invert `x` into `u` (camera numbers, then light numbers), keeping what `old` shares.
+    fn invert_into(
+        &self,
+        x: &PathState,
+        u: &mut [f64],
+        rng: &mut ChainRng,
+        mut old: Option<Old<'_>>,
+    ) -> bool {
+        if !(self.ln_density(x) > f64::NEG_INFINITY) || u.len() < self.dim() {
+            return false;
+        }
+        let (cam, light) = u.split_at_mut(camera_numbers(self.t()));
+        let mut w = SliceStream::new(cam, light);
+        self.invert_camera(x, &mut w, rng, old.as_mut())
+            && self.invert_light(x, &mut w, rng, old.as_mut())
+            && !w.overflowed()
     }
 }
 
@@ -256,12 +287,7 @@ impl Chart<PathState> for TechniqueChart<'_> {
     }
 
     fn invert(&self, x: &PathState, u: &mut [f64], rng: &mut ChainRng) -> bool {
-        if !(self.ln_density(x) > f64::NEG_INFINITY) || u.len() < self.dim() {
-            return false;
-        }
-        let nc = camera_numbers(self.t());
-        let (cam, light) = u.split_at_mut(nc);
-        self.invert_camera(x, cam, rng, None) && self.invert_light(x, light, rng, None)
+        self.invert_into(x, u, rng, None)
     }
 
     /// The numbers `u` of path `x` in this chart, given its numbers `u_from` in chart `from` (same
@@ -277,17 +303,16 @@ impl Chart<PathState> for TechniqueChart<'_> {
         u: &mut [f64],
         rng: &mut ChainRng,
     ) -> bool {
-        if from.k != self.k
-            || u_from.len() < from.dim()
-            || u.len() < self.dim()
-            || !(self.ln_density(x) > f64::NEG_INFINITY)
-        {
+        if from.k != self.k || u_from.len() < from.dim() {
             return false;
         }
-        let (nc_old, nc) = (camera_numbers(from.t()), camera_numbers(self.t()));
-        let (cam, light) = u.split_at_mut(nc);
-        self.invert_camera(x, cam, rng, Some((from.t(), &u_from[..nc_old])))
-            && self.invert_light(x, light, rng, Some((from.s, &u_from[nc_old..])))
+        let (cam, light) = u_from.split_at(camera_numbers(from.t()));
+        let old = Old {
+            t: from.t(),
+            s: from.s,
+            numbers: ReplayStream::new(cam, light, &[]),
+        };
+        self.invert_into(x, u, rng, Some(old))
     }
 
     fn name(&self) -> String {

@@ -7,9 +7,7 @@ use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, offset_origin};
 use crate::light::LightKind;
 use crate::path::MisHeuristic;
-use crate::sampler::{
-    CAMERA_BLOCK, CAMERA_STREAM, IndependentStream, SampleStream, TECHNIQUE_STREAM, VERTEX_BLOCK,
-};
+use crate::sampler::{CAMERA_STREAM, IndependentStream, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
@@ -52,7 +50,9 @@ impl Estimator for PathTracer {
         _splats: &mut Vec<Splat>,
     ) -> Rgb {
         stream.start_stream(CAMERA_STREAM);
+        stream.seek(layout::FILM);
         let film = scene.camera.film_position(pixel, stream.next_2d());
+        stream.seek(layout::LENS);
         let lens = stream.next_2d();
         let cs = scene.camera.sample_ray(film, lens);
         if cs.we == 0.0 {
@@ -135,10 +135,14 @@ impl Estimator for PathTracer {
                 }
             }
             // Continue by BSDF sampling from this vertex's block.
+            // Vertex `bounces + 1` of the camera subpath.
+            let block = layout::camera_vertex(bounces + 1);
             stream.start_stream(CAMERA_STREAM);
-            stream.seek(CAMERA_BLOCK + bounces * VERTEX_BLOCK);
+            stream.seek(block + layout::LOBE);
             let u_lobe = stream.next_1d();
+            stream.seek(block + layout::DIRECTION);
             let u = stream.next_2d();
+            stream.seek(block + layout::ROULETTE);
             let rr = stream.next_1d();
             let Some(bs) = bsdf.sample(wo, u_lobe, u, TransportMode::Radiance) else {
                 break;

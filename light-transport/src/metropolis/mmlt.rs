@@ -11,7 +11,7 @@ use super::stream::PrimaryStream;
 use crate::path::{
     MisHeuristic, Vertex, WalkSettings, camera_subpath, connect, light_subpath, mis_weight,
 };
-use crate::sampler::{CAMERA_STREAM, SampleStream, TECHNIQUE_STREAM};
+use crate::sampler::{CAMERA_STREAM, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
 use mcmc_core::kernel::Observer;
 use mcmc_core::primary_sample::Kelemen;
@@ -48,6 +48,7 @@ impl Mmlt {
         let n = Self::strategies(k);
         let mut stream = PrimaryStream::new(&mut state.sample);
         stream.start_stream(TECHNIQUE_STREAM);
+        stream.seek(layout::TECHNIQUE);
         let u = stream.next_1d();
         let s = mcmc_core::rng::uniform_index(u, n);
         let t = k + 1 - s;
@@ -67,8 +68,8 @@ impl Mmlt {
         {
             let r = raster.unwrap_or_else(|| {
                 scene.camera.raster_of_film([
-                    state.sample.get(CAMERA_STREAM, 0),
-                    state.sample.get(CAMERA_STREAM, 1),
+                    state.sample.get(CAMERA_STREAM, layout::FILM),
+                    state.sample.get(CAMERA_STREAM, layout::FILM + 1),
                 ])
             });
             state.contribution.splats.push((r, v));

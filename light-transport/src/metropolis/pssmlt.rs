@@ -9,7 +9,7 @@ use super::record::{Contribution, Recordable};
 use super::stream::PrimaryStream;
 use crate::integrators::Bdpt;
 use crate::path::{Vertex, camera_subpath, light_subpath};
-use crate::sampler::{CAMERA_STREAM, STREAMS};
+use crate::sampler::{CAMERA_STREAM, STREAMS, layout};
 use crate::scene::Scene;
 use mcmc_core::kernel::Observer;
 use mcmc_core::primary_sample::{Kelemen, PrimarySample};
@@ -84,8 +84,8 @@ impl Pssmlt {
                 .bdpt
                 .evaluate(scene, light, cam, &mut state.contribution.splats);
             let raster = scene.camera.raster_of_film([
-                state.sample.get(CAMERA_STREAM, 0),
-                state.sample.get(CAMERA_STREAM, 1),
+                state.sample.get(CAMERA_STREAM, layout::FILM),
+                state.sample.get(CAMERA_STREAM, layout::FILM + 1),
             ]);
             if !own.is_black() {
                 state.contribution.splats.push((raster, own));

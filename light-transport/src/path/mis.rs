@@ -6,7 +6,6 @@
 //! position.
 
 use super::vertex::Vertex;
-use crate::light::LightKind;
 use crate::scene::Scene;
 
 /// Which heuristic combines the strategies.
@@ -92,9 +91,7 @@ pub fn mis_weight(
     }
     ri = 1.0;
     let light_is_delta = match light.first().map(|v| v.kind) {
-        Some(super::VertexKind::Light { light: l }) => {
-            matches!(scene.lights[l as usize], LightKind::Point { .. })
-        }
+        Some(super::VertexKind::Light { light: l }) => scene.lights[l as usize].is_delta_position(),
         _ => false,
     };
     for i in (0..s).rev() {

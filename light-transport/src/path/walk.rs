@@ -8,7 +8,7 @@ use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, SurfacePoint, offset_origin};
 use crate::sampler::{
-    CAMERA_BLOCK, CAMERA_STREAM, LIGHT_BLOCK, LIGHT_STREAM, SampleStream, VERTEX_BLOCK,
+    CAMERA_BLOCK, CAMERA_STREAM, LIGHT_BLOCK, LIGHT_STREAM, SampleStream, layout,
 };
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -31,12 +31,6 @@ impl WalkSettings {
     }
 }
 
-/// Position of the block read when leaving the `b`-th vertex (`b ≥ 1`) of a subpath.
-#[inline]
-pub fn block_start(endpoint_block: usize, b: usize) -> usize {
-    endpoint_block + (b - 1) * VERTEX_BLOCK
-}
-
 /// Trace a camera subpath of at most `max_vertices` vertices into `path` (cleared first). With
 /// `pixel`, the film numbers place the sample inside that pixel; without, over the whole film.
 pub fn camera_subpath<S: SampleStream>(
@@ -51,8 +45,9 @@ pub fn camera_subpath<S: SampleStream>(
         return;
     }
     stream.start_stream(CAMERA_STREAM);
-    stream.seek(0);
+    stream.seek(layout::FILM);
     let mut film = stream.next_2d();
+    stream.seek(layout::LENS);
     let lens = stream.next_2d();
     if let Some(p) = pixel {
         film = scene.camera.film_position(p, film);
@@ -103,9 +98,11 @@ pub fn light_subpath<S: SampleStream>(
         return;
     }
     stream.start_stream(LIGHT_STREAM);
-    stream.seek(0);
+    stream.seek(layout::LIGHT_CHOICE);
     let choice = stream.next_1d();
+    stream.seek(layout::LIGHT_POSITION);
     let u_pos = stream.next_2d();
+    stream.seek(layout::LIGHT_DIRECTION);
     let u_dir = stream.next_2d();
     let Some((li, p_choice)) = scene.light_distribution.sample(choice) else {
         return;
@@ -192,8 +189,10 @@ fn random_walk<S: SampleStream>(
         let Some(bsdf) = vert.bsdf.as_ref() else {
             break;
         };
-        stream.seek(block_start(endpoint_block, b));
+        let block = layout::vertex(endpoint_block, b);
+        stream.seek(block + layout::LOBE);
         let u_lobe = stream.next_1d();
+        stream.seek(block + layout::DIRECTION);
         let u = stream.next_2d();
         let Some(bs) = bsdf.sample(vert.wo, u_lobe, u, mode) else {
             break;

@@ -30,7 +30,7 @@ use super::state::PathState;
 use super::walk::{extend, lens_endpoint, light_endpoint};
 use crate::bsdf::TransportMode;
 use crate::metropolis::ImportanceKind;
-use crate::path::{Vertex, unoccluded};
+use crate::path::Vertex;
 use crate::scene::Scene;
 use mcmc_core::rng::{categorical, uniform, uniform_index};
 use mcmc_core::{ChainRng, Failure};
@@ -121,7 +121,7 @@ impl Bidirectional {
             .collect();
         let kd = categorical(&weights, uniform(rng)).map_or(k + 2, |i| i + 1);
         let count = deletion_count(k, kd).max(1);
-        let pick = ((uniform(rng) * count as f64) as usize).min(count - 1);
+        let pick = uniform_index(uniform(rng), count);
         let l = if kd == 1 {
             pick as isize
         } else {
@@ -231,19 +231,19 @@ impl Bidirectional {
                 return Err(Failure::Failed);
             }
         }
-        y.change = Some(Change {
+        let change = Change {
             l: d.l,
             m: d.m,
             added: n,
-        });
+        };
         let (s, t) = (light.len(), cam.len());
-        let clear = s == 0 || unoccluded(scene, &light[s - 1], &cam[t - 1]);
-        if !clear
-            || y.path
-                .set_from_subpaths(scene, &light, &cam, s, t)
-                .is_none()
-            || !y.evaluate(scene, importance, 1.0)
+        if y.path
+            .set_from_subpaths(scene, &light, &cam, s, t)
+            .is_some()
         {
+            y.finish_candidate(scene, importance, change, s);
+        } else {
+            y.change = Some(change);
             y.discard();
         }
         Ok(())

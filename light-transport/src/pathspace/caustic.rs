@@ -13,7 +13,7 @@ use super::walk::{angular_offset, trace};
 use crate::bsdf::TransportMode;
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
-use crate::path::{VertexKind, unoccluded};
+use crate::path::VertexKind;
 use crate::scene::Scene;
 use mcmc_core::{ChainRng, Failure};
 
@@ -100,16 +100,12 @@ impl Mutation for Caustic<'_> {
             yp.vertices.push(v);
         }
         yp.vertices.push(xp.lens().clone());
-        y.change = Some(Change {
+        let change = Change {
             l: i0 as isize,
             m: k,
             added: k - 1 - i0,
-        });
-        if !unoccluded(scene, &yp.vertices[k - 1], &yp.vertices[k])
-            || !y.evaluate(scene, self.importance, 1.0)
-        {
-            y.discard();
-        }
+        };
+        y.finish_candidate(scene, self.importance, change, k);
         Ok(())
     }
 

@@ -15,7 +15,7 @@ use super::state::PathState;
 use super::walk::{lens_endpoint, sample_direction, trace};
 use crate::bsdf::TransportMode;
 use crate::metropolis::ImportanceKind;
-use crate::path::{Vertex, unoccluded};
+use crate::path::Vertex;
 use crate::scene::Scene;
 use mcmc_core::{ChainRng, Failure};
 
@@ -97,16 +97,12 @@ impl Mutation for LensSubpath<'_> {
         yp.vertices.clear();
         yp.vertices.extend_from_slice(&xp.vertices[..j]);
         yp.vertices.extend(cam.into_iter().rev());
-        y.change = Some(Change {
+        let change = Change {
             l: j as isize - 1,
             m: xp.edges() + 1,
             added,
-        });
-        if !unoccluded(scene, &yp.vertices[j - 1], &yp.vertices[j])
-            || !y.evaluate(scene, self.importance, 1.0)
-        {
-            y.discard();
-        }
+        };
+        y.finish_candidate(scene, self.importance, change, j);
         Ok(())
     }
 

@@ -8,7 +8,7 @@ use super::mutation::{Change, Mutation, Registration};
 use super::state::PathState;
 use super::walk::sample_path;
 use crate::metropolis::ImportanceKind;
-use crate::sampler::{IndependentStream, SampleStream, TECHNIQUE_STREAM};
+use crate::sampler::{IndependentStream, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
 use mcmc_core::rng::{categorical, uniform, uniform_index};
 use mcmc_core::{ChainRng, Failure};
@@ -88,6 +88,7 @@ impl NewPath {
         out: &mut PathState,
     ) -> bool {
         stream.start_stream(TECHNIQUE_STREAM);
+        stream.seek(layout::TECHNIQUE);
         let s = uniform_index(stream.next_1d(), k + 1);
         let mut buffers = (Vec::new(), Vec::new());
         if sample_path(scene, k, s, stream, &mut buffers, out).is_none() {

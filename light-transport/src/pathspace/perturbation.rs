@@ -30,7 +30,7 @@ use super::walk::{angular_offset, exponential_radius_pdf, pixel_offset, trace};
 use crate::bsdf::TransportMode;
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
-use crate::path::{Vertex, VertexKind, unoccluded};
+use crate::path::{Vertex, VertexKind};
 use crate::scene::Scene;
 use mcmc_core::{ChainRng, Failure};
 use std::f64::consts::TAU;
@@ -331,12 +331,7 @@ pub fn camera_side_propose(
     yp.vertices.extend_from_slice(&xp.vertices[..s]);
     yp.vertices.extend(cam.into_iter().rev());
     yp.vertices[s].delta = false;
-    y.change = Some(chain.change(k));
-    if (s > 0 && !unoccluded(scene, &yp.vertices[s - 1], &yp.vertices[s]))
-        || !y.evaluate(scene, importance, 1.0)
-    {
-        y.discard();
-    }
+    y.finish_candidate(scene, importance, chain.change(k), s);
     Ok(())
 }
 

@@ -83,6 +83,27 @@ impl PathState {
         self.contribution.importance > 0.0
     }
 
+    /// Finish a candidate whose vertices a mutation just placed: record `change`, and evaluate it
+    /// unless the edge `v_{connection−1} → v_connection` it made by connecting two subpaths is
+    /// occluded (then it carries no light and is rejected). `connection = 0`: nothing to test
+    /// (the camera walk reached the light itself).
+    pub fn finish_candidate(
+        &mut self,
+        scene: &Scene,
+        importance: ImportanceKind,
+        change: Change,
+        connection: usize,
+    ) {
+        self.change = Some(change);
+        let v = &self.path.vertices;
+        let clear = connection == 0
+            || (connection < v.len()
+                && crate::path::unoccluded(scene, &v[connection - 1], &v[connection]));
+        if !clear || !self.evaluate(scene, importance, 1.0) {
+            self.discard();
+        }
+    }
+
     /// Mark the state as carrying no light (a candidate whose connection is occluded).
     pub fn discard(&mut self) {
         self.strategy.clear();
