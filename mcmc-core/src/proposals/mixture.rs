@@ -265,6 +265,8 @@ impl<S> Mixture<'_, S> {
                 }
             },
             MixtureRule::Combined => match self.ln_mixture_pair(x, y) {
+                // No component could have made `y` (a candidate carrying nothing): rejected.
+                Some((fwd, _)) if fwd == f64::NEG_INFINITY => f64::NEG_INFINITY,
                 Some((fwd, rev)) => rev - fwd,
                 None => f64::NAN, // counted and rejected by the kernel; see `check_combined`
             },
