@@ -114,6 +114,11 @@ pub trait Proposal<S> {
         let short = full.split('<').next().unwrap_or(full);
         vec![short.rsplit("::").next().unwrap_or(short).to_string()]
     }
+
+    /// `kinds().len()`, without building the names (mixtures call it when they are built).
+    fn kind_count(&self) -> usize {
+        self.kinds().len()
+    }
 }
 
 impl<S, P: Proposal<S> + ?Sized> Proposal<S> for &P {
@@ -138,6 +143,9 @@ impl<S, P: Proposal<S> + ?Sized> Proposal<S> for &P {
     fn kinds(&self) -> Vec<String> {
         (**self).kinds()
     }
+    fn kind_count(&self) -> usize {
+        (**self).kind_count()
+    }
 }
 
 impl<S, P: Proposal<S> + ?Sized> Proposal<S> for Box<P> {
@@ -161,6 +169,9 @@ impl<S, P: Proposal<S> + ?Sized> Proposal<S> for Box<P> {
     }
     fn kinds(&self) -> Vec<String> {
         (**self).kinds()
+    }
+    fn kind_count(&self) -> usize {
+        (**self).kind_count()
     }
 }
 

@@ -32,7 +32,7 @@ use crate::bsdf::TransportMode;
 use crate::metropolis::ImportanceKind;
 use crate::path::Vertex;
 use crate::scene::Scene;
-use mcmc_core::rng::{categorical, uniform, uniform_index};
+use mcmc_core::rng::{uniform, uniform_index};
 use mcmc_core::{ChainRng, Failure};
 
 /// The registration of the bidirectional mutation.
@@ -116,10 +116,17 @@ impl Bidirectional {
 
     /// Sample a deletion from a path of `k ≥ 1` edges.
     pub fn sample_deletion(&self, k: usize, rng: &mut ChainRng) -> Deletion {
-        let weights: Vec<f64> = (1..=k + 2)
-            .map(|kd| deletion_weight(kd) * deletion_count(k, kd) as f64)
-            .collect();
-        let kd = categorical(&weights, uniform(rng)).map_or(k + 2, |i| i + 1);
+        let weight = |kd: usize| deletion_weight(kd) * deletion_count(k, kd) as f64;
+        let total: f64 = (1..=k + 2).map(weight).sum();
+        let mut v = uniform(rng) * total;
+        let kd = (1..=k + 2)
+            .find(|&kd| {
+                let w = weight(kd);
+                let hit = w > 0.0 && v < w;
+                v -= w;
+                hit
+            })
+            .unwrap_or(k + 2);
         let count = deletion_count(k, kd).max(1);
         let pick = uniform_index(uniform(rng), count);
         let l = if kd == 1 {
@@ -159,10 +166,20 @@ impl Bidirectional {
         if lo > hi {
             return None;
         }
-        let weights: Vec<f64> = (lo..=hi)
-            .map(|n| self.addition_probability(k, d, n))
-            .collect();
-        Some(categorical(&weights, uniform(rng)).map_or(hi, |i| lo + i))
+        // Unnormalised weights 2^{−|n − (k_d − 1)|} (addition_probability normalises them).
+        let target = d.kd() as f64 - 1.0;
+        let weight = |n: usize| 0.5f64.powf((n as f64 - target).abs());
+        let total: f64 = (lo..=hi).map(weight).sum();
+        let mut v = uniform(rng) * total;
+        Some(
+            (lo..=hi)
+                .find(|&n| {
+                    let hit = v < weight(n);
+                    v -= weight(n);
+                    hit
+                })
+                .unwrap_or(hi),
+        )
     }
 
     /// Number of splits `a = 0 … N − 1` of `n` new vertices (light side `a`, camera side `n − a`).

@@ -146,14 +146,30 @@ impl std::fmt::Debug for Registration {
 
 /// A mutation as an `mcmc_core` proposal on path states, whose target is the constant 1 in the
 /// common measure ([`super::mutations::ln_target`]).
-pub struct MutationProposal<'a>(pub Box<dyn Mutation + 'a>);
+pub struct MutationProposal<'a> {
+    /// The mutation.
+    pub mutation: Box<dyn Mutation + 'a>,
+    /// Its index in [`super::mutations::REGISTRY`], under which states cache its suitability
+    /// (`None`: no caching).
+    pub index: Option<usize>,
+}
+
+impl<'a> MutationProposal<'a> {
+    /// A mutation without suitability caching.
+    pub fn new(mutation: Box<dyn Mutation + 'a>) -> Self {
+        Self {
+            mutation,
+            index: None,
+        }
+    }
+}
 
 impl Proposal<PathState> for MutationProposal<'_> {
     fn propose(&self, x: &PathState, y: &mut PathState, rng: &mut ChainRng) -> Proposed {
         y.change = None;
-        match self.0.propose(x, rng, y) {
+        match self.mutation.propose(x, rng, y) {
             Err(why) => Proposed::failed(0, why),
-            Ok(()) => Proposed::with_ratio(self.0.ln_ratio(x, y)),
+            Ok(()) => Proposed::with_ratio(self.mutation.ln_ratio(x, y)),
         }
     }
 
@@ -162,18 +178,23 @@ impl Proposal<PathState> for MutationProposal<'_> {
         if !y.carries_light() {
             return Some((f64::NEG_INFINITY, f64::NEG_INFINITY));
         }
-        Some((
-            self.0.ln_density(x, y, c),
-            self.0.ln_density(y, x, c.reverse()),
-        ))
+        let m = &self.mutation;
+        Some((m.ln_density(x, y, c), m.ln_density(y, x, c.reverse())))
     }
 
     fn suitability(&self, x: &PathState) -> f64 {
-        self.0.suitability(x)
+        match self.index {
+            Some(i) => x.suitability.get_or(i, || self.mutation.suitability(x)),
+            None => self.mutation.suitability(x),
+        }
     }
 
     fn kinds(&self) -> Vec<String> {
-        vec![self.0.name().to_string()]
+        vec![self.mutation.name().to_string()]
+    }
+
+    fn kind_count(&self) -> usize {
+        1
     }
 }
 

@@ -244,12 +244,17 @@ impl Mutations {
             scene,
             settings: &settings,
         };
+        const _: () = assert!(REGISTRY.len() <= super::state::CACHED_MUTATIONS);
         let components = REGISTRY
             .iter()
             .zip(&self.probabilities.0)
-            .map(|(r, &w)| {
+            .enumerate()
+            .map(|(i, (r, &w))| {
                 let p: Box<dyn mcmc_core::Proposal<PathState> + Send + Sync + 'a> =
-                    Box::new(MutationProposal((r.build)(&context)));
+                    Box::new(MutationProposal {
+                        mutation: (r.build)(&context),
+                        index: Some(i),
+                    });
                 (w, p)
             })
             .collect();

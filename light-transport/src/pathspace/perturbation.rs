@@ -259,7 +259,7 @@ pub fn camera_chain_of(scene: &Scene, which: CameraSide, x: &PathState) -> Optio
     let v = &x.path.vertices;
     let k = x.path.edges();
     let ok = x.strategy_importance(c.s) > 0.0
-        && x.path.raster(scene).is_some()
+        && x.raster().is_some()
         && ln_branch_probabilities(&x.path, c.s + 1..k, true, TransportMode::Radiance)
             > f64::NEG_INFINITY
         && c.turns
@@ -281,7 +281,7 @@ pub fn camera_side_propose(
     let chain = camera_chain_of(scene, which, x).ok_or(Failure::NotApplicable)?;
     let xp = &x.path;
     let k = xp.edges();
-    let raster = xp.raster(scene).ok_or(Failure::NotApplicable)?;
+    let raster = x.raster().ok_or(Failure::NotApplicable)?;
     let moved = pixel_offset(raster, settings.r1, settings.r2(scene), rng);
     let lens = xp.lens().clone();
     let cs = scene
@@ -363,7 +363,7 @@ pub fn camera_side_density(
     if !end_ok || !chain.turns.iter().all(|&i| scatters_diffusely(&yv[i])) {
         return never;
     }
-    let (Some(rx), Some(ry)) = (xp.raster(scene), yp.raster(scene)) else {
+    let (Some(rx), Some(ry)) = (x.raster(), y.raster()) else {
         return never;
     };
     let r = ((ry[0] - rx[0]).powi(2) + (ry[1] - rx[1]).powi(2)).sqrt();

@@ -11,6 +11,54 @@ use crate::metropolis::{Contribution, ImportanceKind, Recordable};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use std::cell::RefCell;
+use std::sync::atomic::{AtomicU16, AtomicU64, Ordering};
+
+/// Most mutations the suitability cache holds (the registry's size is checked against it).
+pub const CACHED_MUTATIONS: usize = 16;
+
+/// The suitabilities of the registered mutations for one path, each computed on first use: the
+/// mixture asks for every mutation's at every step, and a path's do not change until it is
+/// evaluated anew (which empties the cache). Atomics (relaxed) keep states shareable between
+/// threads; a value is a deterministic function of the path, so races could only recompute it.
+#[derive(Debug, Default)]
+pub struct SuitabilityCache {
+    known: AtomicU16,
+    values: [AtomicU64; CACHED_MUTATIONS],
+}
+
+impl Clone for SuitabilityCache {
+    fn clone(&self) -> Self {
+        let out = Self::default();
+        out.known
+            .store(self.known.load(Ordering::Relaxed), Ordering::Relaxed);
+        for (a, b) in out.values.iter().zip(&self.values) {
+            a.store(b.load(Ordering::Relaxed), Ordering::Relaxed);
+        }
+        out
+    }
+}
+
+impl SuitabilityCache {
+    /// The cached value of mutation `index`, or `compute()` stored.
+    pub fn get_or(&self, index: usize, compute: impl FnOnce() -> f64) -> f64 {
+        if index >= CACHED_MUTATIONS {
+            return compute();
+        }
+        let bit = 1u16 << index;
+        if self.known.load(Ordering::Relaxed) & bit != 0 {
+            return f64::from_bits(self.values[index].load(Ordering::Relaxed));
+        }
+        let v = compute();
+        self.values[index].store(v.to_bits(), Ordering::Relaxed);
+        self.known.fetch_or(bit, Ordering::Relaxed);
+        v
+    }
+
+    /// Forget every value.
+    pub fn clear(&self) {
+        self.known.store(0, Ordering::Relaxed);
+    }
+}
 
 /// A path-space chain state.
 #[derive(Clone, Debug, Default)]
@@ -24,6 +72,8 @@ pub struct PathState {
     /// How the mutation that proposed this state changed its source path (see
     /// [`super::mutation`]); `None` for states not made by a mutation.
     pub change: Option<Change>,
+    /// The registered mutations' suitabilities for this path (filled on use).
+    pub suitability: SuitabilityCache,
 }
 
 impl Recordable for PathState {
@@ -40,6 +90,7 @@ impl PathState {
     /// Evaluate the path: per-strategy importances and the recorded colour `scale · f / Σ_s p_s`.
     /// Returns whether the path carries light (some strategy has a positive contribution).
     pub fn evaluate(&mut self, scene: &Scene, importance: ImportanceKind, scale: f64) -> bool {
+        self.suitability.clear();
         self.strategy.clear();
         self.contribution.splats.clear();
         self.contribution.importance = 0.0;
@@ -77,6 +128,12 @@ impl PathState {
         true
     }
 
+    /// Where the path crosses the image (cached by the evaluation; `None` when it carries no
+    /// light).
+    pub fn raster(&self) -> Option<[f64; 2]> {
+        self.contribution.splats.first().map(|s| s.0)
+    }
+
     /// Whether the path carries light (its evaluation found a strategy with a positive
     /// contribution).
     pub fn carries_light(&self) -> bool {
@@ -106,6 +163,7 @@ impl PathState {
 
     /// Mark the state as carrying no light (a candidate whose connection is occluded).
     pub fn discard(&mut self) {
+        self.suitability.clear();
         self.strategy.clear();
         self.contribution.splats.clear();
         self.contribution.importance = 0.0;

@@ -50,6 +50,10 @@ impl<X: Clone, P: Proposal<Vec<f64>>> Proposal<ChartState<X>> for InChart<P> {
         self.proposal.ln_move_density(&from.u, &to.u, kind)
     }
 
+    fn kind_count(&self) -> usize {
+        self.proposal.kind_count()
+    }
+
     fn kinds(&self) -> Vec<String> {
         self.proposal.kinds()
     }

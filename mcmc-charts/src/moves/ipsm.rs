@@ -101,6 +101,10 @@ impl<X: Clone, I: Integrand<X>, C: Chart<X>, P: Proposal<Vec<f64>>> Proposal<Cha
         Proposed::new(r, k.kind)
     }
 
+    fn kind_count(&self) -> usize {
+        self.kernel.kind_count()
+    }
+
     fn kinds(&self) -> Vec<String> {
         let through = match self.chart {
             Some(j) => format!("ipsm[{}]", self.target.atlas.name(j)),

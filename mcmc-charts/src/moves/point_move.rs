@@ -29,7 +29,7 @@ impl<'a, X, I, C, P> PointMove<'a, X, I, C, P> {
     }
 }
 
-impl<X: Clone + Send + Sync, I: Integrand<X>, C: Chart<X>, P: Proposal<X>> Proposal<ChartState<X>>
+impl<X: Clone, I: Integrand<X>, C: Chart<X>, P: Proposal<X>> Proposal<ChartState<X>>
     for PointMove<'_, X, I, C, P>
 {
     fn propose(&self, x: &ChartState<X>, y: &mut ChartState<X>, rng: &mut ChainRng) -> Proposed {
@@ -48,6 +48,10 @@ impl<X: Clone + Send + Sync, I: Integrand<X>, C: Chart<X>, P: Proposal<X>> Propo
 
     fn suitability(&self, x: &ChartState<X>) -> f64 {
         self.proposal.suitability(&x.x)
+    }
+
+    fn kind_count(&self) -> usize {
+        self.proposal.kind_count()
     }
 
     fn kinds(&self) -> Vec<String> {

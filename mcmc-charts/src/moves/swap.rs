@@ -39,4 +39,8 @@ impl<X: Clone, I: Integrand<X>, C: Chart<X>> Proposal<ChartState<X>> for ChartSw
     fn kinds(&self) -> Vec<String> {
         vec!["chart swap".into()]
     }
+
+    fn kind_count(&self) -> usize {
+        1
+    }
 }

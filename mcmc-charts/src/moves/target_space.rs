@@ -45,6 +45,10 @@ impl<X: Clone, P: Proposal<X>> Proposal<ChartState<X>> for TargetSpace<P> {
         self.proposal.ln_move_density(&from.x, &to.x, kind)
     }
 
+    fn kind_count(&self) -> usize {
+        self.proposal.kind_count()
+    }
+
     fn kinds(&self) -> Vec<String> {
         self.proposal.kinds()
     }

@@ -104,7 +104,7 @@ impl<'a, S> Mixture<'a, S> {
             cumulative.push(acc);
             ln_weights.push((w / total).ln());
             kind_offsets.push(offset);
-            offset += p.kinds().len();
+            offset += p.kind_count();
             comps.push(p);
         }
         Ok(Self {
@@ -180,19 +180,31 @@ impl<'a, S> Mixture<'a, S> {
         }
     }
 
-    fn choose(&self, x: &S, rng: &mut ChainRng) -> Option<usize> {
-        let u = uniform(rng);
+    /// `w_k s_k(x)` for every component under suitability selection (`None` under fixed
+    /// selection, where the normalised base weights are the probabilities).
+    fn suited(&self, x: &S) -> Option<Vec<f64>> {
         match self.selection {
-            Selection::Fixed => Some(
+            Selection::Fixed => None,
+            Selection::Suitability => Some(
+                self.components
+                    .iter()
+                    .zip(&self.ln_weights)
+                    .map(|(c, lw)| lw.exp() * suitability(c.as_ref(), x))
+                    .collect(),
+            ),
+        }
+    }
+
+    /// The component chosen by `u` given `suited(x)`.
+    fn choose(&self, suited: Option<&[f64]>, u: f64) -> Option<usize> {
+        match suited {
+            None => Some(
                 self.cumulative
                     .iter()
                     .position(|&c| u < c)
                     .unwrap_or(self.components.len() - 1),
             ),
-            Selection::Suitability => {
-                let w: Vec<f64> = self.ln_selection(x).iter().map(|l| l.exp()).collect();
-                crate::rng::categorical(&w, u)
-            }
+            Some(w) => crate::rng::categorical(w, u),
         }
     }
 
@@ -245,24 +257,21 @@ pub fn log_sum_exp(terms: &[f64]) -> f64 {
 }
 
 impl<S> Mixture<'_, S> {
-    /// What the mixture reports for a candidate `y` drawn from `x` by component `k`.
-    fn report(&self, k: usize, x: &S, y: &S, p: Proposed) -> Proposed {
+    /// What the mixture reports for a candidate `y` drawn from `x` by component `k`
+    /// (`suited_x`: [`Mixture::suited`] of `x`, computed once per proposal).
+    fn report(&self, k: usize, x: &S, y: &S, p: Proposed, suited_x: Option<&[f64]>) -> Proposed {
         let kind = self.kind_offsets[k] + p.kind;
         if p.failure.is_some() {
             return Proposed { kind, ..p };
         }
         let ln_ratio = match self.rule {
-            MixtureRule::PerComponent => match self.selection {
-                Selection::Fixed => p.ln_ratio,
-                Selection::Suitability => {
-                    let (sx, sy) = (
-                        suitability(self.components[k].as_ref(), x),
-                        suitability(self.components[k].as_ref(), y),
-                    );
-                    let (tx, ty) = (self.total_suitability(x), self.total_suitability(y));
+            MixtureRule::PerComponent => match (suited_x, self.suited(y)) {
+                (Some(sx), Some(sy)) => {
                     // ln P_k(y) − ln P_k(x); the base weight cancels.
-                    p.ln_ratio + sy.ln() - ty.ln() - sx.ln() + tx.ln()
+                    let (tx, ty): (f64, f64) = (sx.iter().sum(), sy.iter().sum());
+                    p.ln_ratio + sy[k].ln() - ty.ln() - sx[k].ln() + tx.ln()
                 }
+                _ => p.ln_ratio,
             },
             MixtureRule::Combined => match self.ln_mixture_pair(x, y) {
                 // No component could have made `y` (a candidate carrying nothing): rejected.
@@ -276,26 +285,19 @@ impl<S> Mixture<'_, S> {
 
     /// `Σ_k w_k s_k(x)` (1 under fixed selection).
     fn total_suitability(&self, x: &S) -> f64 {
-        match self.selection {
-            Selection::Fixed => 1.0,
-            Selection::Suitability => self
-                .components
-                .iter()
-                .zip(&self.ln_weights)
-                .map(|(c, lw)| lw.exp() * suitability(c.as_ref(), x))
-                .sum(),
-        }
+        self.suited(x).map_or(1.0, |w| w.iter().sum())
     }
 }
 
 impl<S> Proposal<S> for Mixture<'_, S> {
     fn propose(&self, x: &S, y: &mut S, rng: &mut ChainRng) -> Proposed {
-        let Some(k) = self.choose(x, rng) else {
+        let suited = self.suited(x);
+        let Some(k) = self.choose(suited.as_deref(), uniform(rng)) else {
             // No component suits x (possible only with suitability selection).
             return Proposed::failed(0, Failure::NotApplicable);
         };
         let p = self.components[k].propose(x, y, rng);
-        self.report(k, x, y, p)
+        self.report(k, x, y, p, suited.as_deref())
     }
 
     fn ln_move_density(&self, from: &S, to: &S, kind: usize) -> Option<f64> {
@@ -312,12 +314,13 @@ impl<S> Proposal<S> for Mixture<'_, S> {
 
     fn outcomes(&self, x: &S) -> Option<Vec<Outcome<S>>> {
         let mut out = Vec::new();
+        let suited = self.suited(x);
         for (k, (c, lw)) in self.components.iter().zip(self.ln_selection(x)).enumerate() {
             if lw == f64::NEG_INFINITY {
                 continue;
             }
             for o in c.outcomes(x)? {
-                let proposed = self.report(k, x, &o.state, o.proposed);
+                let proposed = self.report(k, x, &o.state, o.proposed, suited.as_deref());
                 out.push(Outcome {
                     probability: lw.exp() * o.probability,
                     state: o.state,
@@ -345,6 +348,10 @@ impl<S> Proposal<S> for Mixture<'_, S> {
 
     fn kinds(&self) -> Vec<String> {
         self.kinds_inner()
+    }
+
+    fn kind_count(&self) -> usize {
+        self.components.iter().map(|c| c.kind_count()).sum()
     }
 }
 
