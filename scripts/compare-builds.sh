@@ -8,7 +8,8 @@
 # Builds REV in a git worktree (../charted-REV, or OLD_DIR), renders a BDPT reference per scene with this
 # build (REFTIME seconds, default 480, kept in out/ref/), then runs `charted compare` with both
 # builds, alternating, ROUNDS times (default 1), at 256×256 (RESOLUTION to change), and prints the
-# final RMSE of every algorithm, build and round. Outputs stay in out/builds/.
+# final RMSE of every algorithm, build and round. Outputs stay in out/builds/. NEW_BIN names a
+# copy of this build's binary to use instead (so the checkout can change while a measurement runs).
 set -euo pipefail
 rev=$1 scenes=$2 algos=$3 secs=$4 rounds=${5:-1}
 shift $(( $# < 5 ? $# : 5 ))
@@ -19,10 +20,10 @@ old=${OLD_DIR:-"$root/../charted-$rev"}
 res=${RESOLUTION:-256x256}
 reftime=${REFTIME:-480}
 cd "$root"
-cargo build --release --quiet
+[[ -z ${NEW_BIN:-} ]] && cargo build --release --quiet
 if [[ ! -d $old ]]; then git worktree add --detach "$old" "$rev"; fi
 (cd "$old" && cargo build --release --quiet)
-new_bin="$root/target/release/charted" old_bin="$old/target/release/charted"
+new_bin=${NEW_BIN:-"$root/target/release/charted"} old_bin="$old/target/release/charted"
 mkdir -p out/ref out/builds
 for scene in $scenes; do
   ref="out/ref/$scene.exr"

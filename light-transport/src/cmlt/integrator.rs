@@ -321,9 +321,15 @@ impl Cmlt {
             .cloned()
             .unwrap_or_else(|| vec![1.0; k + 1]);
         let refresh = self.refresh(target);
-        let path_moves = st
-            .mutations
-            .proposal(scene, NewPath::only(k, st.max_edges))?;
+        let path_moves: CmltMove<'a> = if st.pathspace > 0.0 {
+            let mix = st
+                .mutations
+                .proposal(scene, NewPath::only(k, st.max_edges))?;
+            Box::new(PointMove::new(target, mix, refresh.clone()))
+        } else {
+            // Never chosen: only its kinds keep the statistics' layout.
+            Box::new(Unused(crate::pathspace::REGISTRY.len()))
+        };
         let rest = 1.0 - p_swap;
         Ok(vec![
             (
@@ -341,10 +347,7 @@ impl Cmlt {
                         .with_refresh(refresh.clone()),
                 ),
             ),
-            (
-                rest * st.pathspace,
-                Box::new(PointMove::new(target, path_moves, refresh)),
-            ),
+            (rest * st.pathspace, path_moves),
         ])
     }
 
@@ -364,6 +367,24 @@ impl Cmlt {
             },
         )?;
         Ok(MetropolisHastings::new(joint, mix))
+    }
+}
+
+/// A move of weight zero that keeps a place in the statistics (`.0` kinds).
+struct Unused(usize);
+
+impl Proposal<CmltState> for Unused {
+    fn propose(&self, x: &CmltState, y: &mut CmltState, _: &mut ChainRng) -> mcmc_core::Proposed {
+        y.clone_from(x);
+        mcmc_core::Proposed::failed(0, mcmc_core::Failure::NotApplicable)
+    }
+
+    fn kind_count(&self) -> usize {
+        self.0
+    }
+
+    fn kinds(&self) -> Vec<String> {
+        vec!["unused".into(); self.0]
     }
 }
 
@@ -416,6 +437,37 @@ impl Method for Cmlt {
         };
         for _ in 0..n {
             kernel.step(chain, rng, observer);
+        }
+    }
+
+    fn mutate_chunk<O: Observer<CmltState>>(
+        &self,
+        scene: &Scene,
+        chains: &mut [Chain<CmltState>],
+        rngs: &mut [ChainRng],
+        n: u64,
+        observer: &mut O,
+    ) {
+        // The kernels of the path lengths present in the group, built once.
+        let max = self.settings.max_edges;
+        let atlases: Vec<TechniqueAtlas<'_>> = (1..=max).map(|k| self.atlas(scene, k)).collect();
+        let targets: Vec<TechniqueTarget<'_>> = atlases.iter().map(Self::target).collect();
+        let joints: Vec<TechniqueJoint<'_>> = targets.iter().map(Joint::new).collect();
+        let mut kernels: Vec<Option<CmltKernel<'_>>> = (0..max).map(|_| None).collect();
+        for (chain, rng) in chains.iter_mut().zip(rngs.iter_mut()) {
+            let k = chain.state.x.path.edges();
+            if !(1..=max).contains(&k) {
+                continue;
+            }
+            if kernels[k - 1].is_none() {
+                // Validated in `new`: building the moves cannot fail.
+                kernels[k - 1] = self.kernel(scene, &targets[k - 1], &joints[k - 1], k).ok();
+            }
+            if let Some(kernel) = kernels[k - 1].as_mut() {
+                for _ in 0..n {
+                    kernel.step(chain, rng, observer);
+                }
+            }
         }
     }
 

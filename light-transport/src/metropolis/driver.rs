@@ -40,6 +40,21 @@ pub trait Method: Sync {
         rng: &mut ChainRng,
         observer: &mut O,
     );
+    /// Run `n` mutations of each of `chains` (with its own `rngs[c]`); the driver calls this for
+    /// every group of chains it runs in one thread, so a method can build what its kernels share
+    /// once per group instead of once per chain. The default calls [`Method::mutate`] per chain.
+    fn mutate_chunk<O: Observer<Self::State>>(
+        &self,
+        scene: &Scene,
+        chains: &mut [Chain<Self::State>],
+        rngs: &mut [ChainRng],
+        n: u64,
+        observer: &mut O,
+    ) {
+        for (chain, rng) in chains.iter_mut().zip(rngs.iter_mut()) {
+            self.mutate(scene, chain, n, rng, observer);
+        }
+    }
     /// Names of the move kinds (for statistics).
     fn kinds(&self) -> Vec<String>;
     /// Told the per-group normalisations `b_g` once the bootstrap is done, before any chain runs
@@ -353,9 +368,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
                 .for_each(|((cs, rs), (chunk, rays))| {
                     crate::accel::take_ray_count();
                     let mut rec = ExpectedValue { recorder: chunk, b };
-                    for (chain, rng) in cs.iter_mut().zip(rs.iter_mut()) {
-                        method.mutate(scene, chain, step, rng, &mut rec);
-                    }
+                    method.mutate_chunk(scene, cs, rs, step, &mut rec);
                     *rays += crate::accel::take_ray_count();
                 });
             left -= step;

@@ -88,6 +88,22 @@ impl Method for PathMlt {
         }
     }
 
+    fn mutate_chunk<O: Observer<PathState>>(
+        &self,
+        scene: &Scene,
+        chains: &mut [Chain<PathState>],
+        rngs: &mut [ChainRng],
+        n: u64,
+        observer: &mut O,
+    ) {
+        // One mixture for the whole group (validated in `new`: building it cannot fail).
+        if let Ok(proposal) = self.mutations.proposal(scene, self.new_path()) {
+            for (chain, rng) in chains.iter_mut().zip(rngs.iter_mut()) {
+                Mutations::run(&proposal, chain, n, rng, observer);
+            }
+        }
+    }
+
     fn kinds(&self) -> Vec<String> {
         Mutations::kinds()
     }
