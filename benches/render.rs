@@ -6,7 +6,7 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use light_transport::accel::{Bvh, Primitive};
-use light_transport::geometry::Triangle;
+use light_transport::geometry::{NO_SHADING, Triangle};
 use light_transport::integrators::{Bdpt, Budget, PathTracer, render};
 use light_transport::math::DVec3;
 use light_transport::path::{MisHeuristic, WalkSettings};
@@ -32,11 +32,13 @@ fn terrain(n: usize) -> Vec<Primitive> {
                 p: [p(i, j), p(i + 1, j), p(i + 1, j + 1)],
                 uv,
                 flip: false,
+                shading: NO_SHADING,
             }));
             out.push(Primitive::Triangle(Triangle {
                 p: [p(i, j), p(i + 1, j + 1), p(i, j + 1)],
                 uv,
                 flip: false,
+                shading: NO_SHADING,
             }));
         }
     }

@@ -2,7 +2,7 @@
 //! triangles and spheres. Traversal runs in f32 on boxes padded by a relative epsilon so rounding
 //! cannot lose a hit; primitives are intersected in f64 and the closest f64 hit is kept.
 
-use crate::geometry::{Hit, Sphere, Triangle};
+use crate::geometry::{Hit, Sphere, Triangle, TriangleShading};
 use crate::math::DVec3;
 use glam::Vec3A;
 use obvhs::BvhBuildParams;
@@ -43,13 +43,21 @@ impl Primitive {
         }
     }
 
-    /// The surface point of a hit found by [`Primitive::intersect_t`].
+    /// The surface point of a hit found by [`Primitive::intersect_t`] (`shading`: the scene's
+    /// table of triangle shading data).
     #[inline]
-    fn hit_point(&self, o: DVec3, d: DVec3, (t, b1, b2): (f64, f64, f64), index: u32) -> Hit {
+    fn hit_point(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        (t, b1, b2): (f64, f64, f64),
+        index: u32,
+        shading: &[TriangleShading],
+    ) -> Hit {
         match self {
             Primitive::Triangle(tri) => Hit {
                 t,
-                point: tri.point(b1, b2, index),
+                point: tri.point_shaded(b1, b2, index, shading.get(tri.shading as usize)),
             },
             Primitive::Sphere(s) => Hit {
                 t,
@@ -61,7 +69,7 @@ impl Primitive {
     #[cfg(test)]
     fn intersect(&self, o: DVec3, d: DVec3, t_max: f64, index: u32) -> Option<Hit> {
         self.intersect_t(o, d, t_max)
-            .map(|h| self.hit_point(o, d, h, index))
+            .map(|h| self.hit_point(o, d, h, index, &[]))
     }
 
     #[inline]
@@ -95,6 +103,9 @@ pub struct Bvh {
     pub primitives: Vec<Primitive>,
     /// `original[i]`: the index primitive `i` had in the list given to [`Bvh::new`].
     pub original: Vec<u32>,
+    /// Shading data of the triangles that have vertex normals ([`Triangle::shading`] indexes
+    /// it).
+    pub shading: Vec<TriangleShading>,
 }
 
 fn to_f32(v: DVec3) -> Vec3A {
@@ -102,8 +113,14 @@ fn to_f32(v: DVec3) -> Vec3A {
 }
 
 impl Bvh {
-    /// Build over `primitives` (which are then stored in leaf order; see [`Bvh::original`]).
+    /// Build over flat `primitives` (which are then stored in leaf order; see
+    /// [`Bvh::original`]).
     pub fn new(primitives: Vec<Primitive>) -> Self {
+        Self::with_shading(primitives, Vec::new())
+    }
+
+    /// Build over `primitives` whose triangles refer to `shading` data.
+    pub fn with_shading(primitives: Vec<Primitive>, shading: Vec<TriangleShading>) -> Self {
         let aabbs: Vec<Aabb> = primitives
             .iter()
             .map(|p| {
@@ -134,6 +151,7 @@ impl Bvh {
             bvh,
             primitives,
             original,
+            shading,
         }
     }
 
@@ -168,7 +186,9 @@ impl Bvh {
                     None => f32::INFINITY,
                 }
             });
-        best.map(|(h, index)| self.primitives[index as usize].hit_point(o, d, h, index))
+        best.map(|(h, index)| {
+            self.primitives[index as usize].hit_point(o, d, h, index, &self.shading)
+        })
     }
 
     /// Whether anything blocks the open segment `o + t d`, `t ∈ (0, t_max)`.
@@ -203,6 +223,7 @@ impl Bvh {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::NO_SHADING;
     use mcmc_core::rng::{stream, uniform};
 
     /// The BVH finds exactly what brute force finds.
@@ -222,6 +243,7 @@ mod tests {
                 p,
                 uv: [[0.0; 2]; 3],
                 flip: false,
+                shading: NO_SHADING,
             }));
         }
         for _ in 0..20 {

@@ -127,6 +127,11 @@ impl Camera {
         self.to_world.transform_vector3(DVec3::Z).normalize()
     }
 
+    /// The surface point of a lens position `p` (normal: the viewing direction).
+    pub fn lens_point(&self, p: DVec3) -> crate::geometry::SurfacePoint {
+        crate::geometry::SurfacePoint::flat(p, self.forward(), u32::MAX)
+    }
+
     fn image_area(&self) -> f64 {
         4.0 * self.half[0] * self.half[1]
     }

@@ -104,16 +104,9 @@ impl LightKind {
                 };
                 Some((p, 1.0 / area))
             }
-            LightKind::Point { position, .. } => Some((
-                SurfacePoint {
-                    p: position,
-                    n: DVec3::Z,
-                    uv: [0.0; 2],
-                    dpdu: DVec3::X,
-                    primitive: u32::MAX,
-                },
-                1.0,
-            )),
+            LightKind::Point { position, .. } => {
+                Some((SurfacePoint::flat(position, DVec3::Z, u32::MAX), 1.0))
+            }
         }
     }
 
@@ -142,13 +135,7 @@ impl LightKind {
                 intensity,
             } => {
                 let (w, pdf_dir) = self.sample_direction(DVec3::Z, u_dir)?;
-                let point = SurfacePoint {
-                    p: position,
-                    n: w,
-                    uv: [0.0; 2],
-                    dpdu: DVec3::X,
-                    primitive: u32::MAX,
-                };
+                let point = SurfacePoint::flat(position, w, u32::MAX);
                 Some(EmissionSample {
                     point,
                     w,
@@ -342,7 +329,7 @@ impl LightDistribution {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::{Sphere, Triangle};
+    use crate::geometry::{NO_SHADING, Sphere, Triangle};
 
     #[test]
     fn emission_inverts() {
@@ -351,6 +338,7 @@ mod tests {
                 p: [DVec3::ZERO, DVec3::X, DVec3::Y],
                 uv: [[0.0; 2]; 3],
                 flip: false,
+                shading: NO_SHADING,
             }),
             Primitive::Sphere(Sphere {
                 center: DVec3::new(3.0, 0.0, 0.0),

@@ -27,8 +27,15 @@
 //!   among the delta lobes that produce `wi`, by probability), `u_lobe` is uniform within that
 //!   lobe's interval (or the branch's sub-interval for dielectrics), the lobe's own inverse gives
 //!   `(u0, u1)`, and numbers a lobe does not use are uniform. `None` when `wi` cannot be produced.
-//! * The local frame's normal is the **geometric** normal; reflection lobes are two-sided (they
-//!   work for `wo` below the surface by mirroring), dielectrics choose `η` by the side of `wo`.
+//! * The local frame is the **shading** frame (shading normal, shading tangent); reflection lobes
+//!   are two-sided (they work for `wo` below the surface by mirroring), dielectrics choose `η` by
+//!   the side of `wo`. The **geometric** normal decides the sides: a direction that the shading
+//!   normal puts on one side of the surface and the geometric normal on the other carries
+//!   nothing — `eval`, `pdf` and `eval_delta` are zero, `sample` fails, `invert` has no answer.
+//!   This closes the light leaks of shading normals (light arriving from behind the geometric
+//!   surface) at the price of black facets where the two normals disagree near grazing angles
+//!   (Veach 1997 §5.3 discusses both; pbrt makes the same choice for the side of `wi`). Without
+//!   shading normals the rule only removes the exact tangent directions.
 //!
 //! # Models and conventions
 //!
@@ -127,8 +134,10 @@ impl LobeWeights {
 /// A BSDF at one surface point.
 #[derive(Clone, Debug)]
 pub struct Bsdf {
-    /// Shading frame (normal = geometric normal; first tangent = anisotropy direction).
+    /// Shading frame (normal = shading normal; first tangent = anisotropy direction).
     pub frame: Frame,
+    /// Geometric normal (decides on which side of the surface a direction lies).
+    pub ng: DVec3,
     lobes: Lobes,
 }
 
@@ -170,7 +179,33 @@ impl Bsdf {
         b.add(material, Rgb::WHITE, 1.0, 0)?;
         let mut lobes = b.lobes;
         lobes.finish();
-        Ok(Bsdf { frame, lobes })
+        Ok(Bsdf {
+            ng: frame.n,
+            frame,
+            lobes,
+        })
+    }
+
+    /// The same BSDF on a surface whose geometric normal is `ng` (the frame's normal being the
+    /// shading normal).
+    pub fn with_geometric_normal(mut self, ng: DVec3) -> Self {
+        self.ng = ng;
+        self
+    }
+
+    /// Whether the world direction `w`, `l` in the local frame, lies on the same side of the
+    /// surface by the shading normal and by the geometric normal.
+    #[inline]
+    fn sides_agree(&self, w: DVec3, l: DVec3) -> bool {
+        let g = w.dot(self.ng);
+        (g > 0.0 && l.z > 0.0) || (g < 0.0 && l.z < 0.0)
+    }
+
+    /// `wo` and `wi` in the local frame, when both lie on a side the two normals agree on.
+    #[inline]
+    fn locals(&self, wo: DVec3, wi: DVec3) -> Option<(DVec3, DVec3)> {
+        let (lo, li) = (local(&self.frame, wo)?, local(&self.frame, wi)?);
+        (self.sides_agree(wo, lo) && self.sides_agree(wi, li)).then_some((lo, li))
     }
 
     /// Sample a direction from the lobe number `u_lobe` and direction numbers `u`.
@@ -181,8 +216,9 @@ impl Bsdf {
         u: [f64; 2],
         mode: TransportMode,
     ) -> Option<BsdfSample> {
+        let wo_world = wo;
         let wo = local(&self.frame, wo)?;
-        if wo.z == 0.0 {
+        if wo.z == 0.0 || !self.sides_agree(wo_world, wo) {
             return None;
         }
         let p = self.lobes.probabilities(wo);
@@ -192,6 +228,9 @@ impl Bsdf {
         // with it reproduce them exactly.
         let wi = self.frame.to_world(s.wi);
         let wl = local(&self.frame, wi)?;
+        if !self.sides_agree(wi, wl) {
+            return None;
+        }
         let (f, pdf) = if s.delta {
             let t = self.lobes.delta_terms(&p, wo, wl, mode);
             t.iter()
@@ -213,12 +252,12 @@ impl Bsdf {
 
     /// Evaluate the non-delta part.
     pub fn eval(&self, wo: DVec3, wi: DVec3, mode: TransportMode) -> Rgb {
-        match (local(&self.frame, wo), local(&self.frame, wi)) {
-            (Some(wo), Some(wi)) => {
+        match self.locals(wo, wi) {
+            Some((wo, wi)) => {
                 let f = self.lobes.eval(wo, wi, mode);
                 if f.is_finite() { f } else { Rgb::BLACK }
             }
-            _ => Rgb::BLACK,
+            None => Rgb::BLACK,
         }
     }
 
@@ -231,7 +270,7 @@ impl Bsdf {
     /// `(f, probability)` of the delta lobes producing `wi` from `wo`, as [`Bsdf::sample`] would
     /// report them; `None` when no delta lobe produces `wi`.
     pub fn eval_delta(&self, wo: DVec3, wi: DVec3, mode: TransportMode) -> Option<BsdfSample> {
-        let (lo, li) = (local(&self.frame, wo)?, local(&self.frame, wi)?);
+        let (lo, li) = self.locals(wo, wi)?;
         let p = self.lobes.probabilities(lo);
         let t = self.lobes.delta_terms(&p, lo, li, mode);
         let (f, pdf) = t
@@ -273,7 +312,7 @@ impl Bsdf {
             weights: [0.0; MAX_LOBES],
             len,
         };
-        let (Some(wo), Some(wi)) = (local(&self.frame, wo), local(&self.frame, wi)) else {
+        let Some((wo, wi)) = self.locals(wo, wi) else {
             return out;
         };
         let p = self.lobes.probabilities(wo);
@@ -303,7 +342,7 @@ impl Bsdf {
         lobe: usize,
         rng: &mut ChainRng,
     ) -> Option<[f64; 3]> {
-        let (wo, wi) = (local(&self.frame, wo)?, local(&self.frame, wi)?);
+        let (wo, wi) = self.locals(wo, wi)?;
         if lobe >= self.lobes.as_slice().len() {
             return None;
         }

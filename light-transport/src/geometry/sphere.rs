@@ -50,20 +50,34 @@ impl Sphere {
         }
     }
 
-    /// The surface point at world position `p` (projected onto the sphere).
+    /// The surface point at world position `p` (projected onto the sphere), with the exact
+    /// differential geometry of the parameterisation `u = φ/2π`, `v = θ/π` (`θ` from `+z`):
+    /// `∂p/∂u = 2π (−y, x, 0)`, `∂p/∂v = π (z cos φ, z sin φ, −r sin θ)` relative to the centre,
+    /// and `∂n/∂u = ±∂p/∂u / r`, `∂n/∂v = ±∂p/∂v / r` (the normal is the scaled position).
     pub fn point(&self, p: DVec3, primitive: u32) -> SurfacePoint {
         let n = (p - self.center).normalize();
         let p = self.center + n * self.radius;
         let phi = crate::math::phi(n);
-        let uv = [phi / (2.0 * PI), (n.z.clamp(-1.0, 1.0)).acos() / PI];
-        let dpdu = DVec3::new(-n.y, n.x, 0.0)
-            .try_normalize()
-            .unwrap_or(DVec3::X);
+        let cos_theta = n.z.clamp(-1.0, 1.0);
+        let uv = [phi / (2.0 * PI), cos_theta.acos() / PI];
+        let q = n * self.radius;
+        let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+        let dpdu = DVec3::new(-q.y, q.x, 0.0) * (2.0 * PI);
+        let dpdv = DVec3::new(q.z * phi.cos(), q.z * phi.sin(), -self.radius * sin_theta) * PI;
+        let sign = if self.flip { -1.0 } else { 1.0 };
+        let n = n * sign;
         SurfacePoint {
             p,
-            n: if self.flip { -n } else { n },
+            n,
+            ns: n,
             uv,
+            tangent: dpdu
+                .try_normalize()
+                .unwrap_or_else(|| crate::math::Frame::from_normal(n).s),
             dpdu,
+            dpdv,
+            dndu: dpdu * (sign / self.radius),
+            dndv: dpdv * (sign / self.radius),
             primitive,
         }
     }

@@ -1,10 +1,27 @@
 //! Triangles: intersection (Möller–Trumbore in f64 with a relative tolerance on the edges),
-//! uniform area sampling and its inverse.
+//! uniform area sampling and its inverse, and the differential geometry of a point: the
+//! parameterisation by texture coordinates (pbrt's default `(0,0), (1,0), (1,1)` when a mesh has
+//! none), the interpolated shading normal `N = b0 n0 + b1 n1 + b2 n2` normalised, and the
+//! derivatives of position and of the *normalised* shading normal,
+//! `∂n_s/∂u = (∂N/∂u − n_s (n_s · ∂N/∂u)) / |N|`.
 
 use super::SurfacePoint;
 use crate::math::DVec3;
 
-/// A triangle with optional per-vertex texture coordinates.
+/// `Triangle::shading` of a triangle without vertex normals.
+pub const NO_SHADING: u32 = u32::MAX;
+
+/// Per-vertex shading data of a triangle: unit normals (on the side of its geometric normal) and
+/// optional tangents.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleShading {
+    /// Vertex normals.
+    pub n: [DVec3; 3],
+    /// Vertex tangents (pbrt `"S"`).
+    pub s: Option<[DVec3; 3]>,
+}
+
+/// A triangle with optional per-vertex texture coordinates and shading data.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Triangle {
     /// Vertices.
@@ -13,6 +30,8 @@ pub struct Triangle {
     pub uv: [[f64; 2]; 3],
     /// Flip the geometric normal.
     pub flip: bool,
+    /// Index of its [`TriangleShading`] in the scene's table ([`NO_SHADING`]: flat).
+    pub shading: u32,
 }
 
 impl Triangle {
@@ -56,32 +75,76 @@ impl Triangle {
         (t > 0.0 && t < t_max).then_some((t, b1, b2))
     }
 
-    /// The surface point at barycentrics `(b1, b2)`.
+    /// The flat surface point at barycentrics `(b1, b2)` (geometric normal only).
     pub fn point(&self, b1: f64, b2: f64, primitive: u32) -> SurfacePoint {
+        self.point_shaded(b1, b2, primitive, None)
+    }
+
+    /// The surface point at barycentrics `(b1, b2)` with the triangle's shading data.
+    pub fn point_shaded(
+        &self,
+        b1: f64,
+        b2: f64,
+        primitive: u32,
+        shading: Option<&TriangleShading>,
+    ) -> SurfacePoint {
         let b0 = 1.0 - b1 - b2;
         let p = self.p[0] * b0 + self.p[1] * b1 + self.p[2] * b2;
         let uv = [
             self.uv[0][0] * b0 + self.uv[1][0] * b1 + self.uv[2][0] * b2,
             self.uv[0][1] * b0 + self.uv[1][1] * b1 + self.uv[2][1] * b2,
         ];
-        SurfacePoint {
-            p,
-            n: self.normal(),
-            uv,
-            dpdu: self.dpdu(),
-            primitive,
-        }
-    }
-
-    fn dpdu(&self) -> DVec3 {
-        let (d1, d2) = (self.p[1] - self.p[0], self.p[2] - self.p[0]);
+        let n = self.normal();
+        let (e1, e2) = (self.p[1] - self.p[0], self.p[2] - self.p[0]);
+        // d(b1, b2)/d(u, v): the inverse of the uv edge matrix (barycentrics themselves where the
+        // texture coordinates are degenerate).
         let (du1, dv1) = (self.uv[1][0] - self.uv[0][0], self.uv[1][1] - self.uv[0][1]);
         let (du2, dv2) = (self.uv[2][0] - self.uv[0][0], self.uv[2][1] - self.uv[0][1]);
         let det = du1 * dv2 - dv1 * du2;
-        if det.abs() < 1e-12 {
-            return d1.normalize_or_zero();
+        let by_uv = |a: DVec3, b: DVec3| -> (DVec3, DVec3) {
+            if det.abs() > 1e-12 * (du1.abs() + dv1.abs()) * (du2.abs() + dv2.abs()) && det != 0.0 {
+                ((a * dv2 - b * dv1) / det, (b * du1 - a * du2) / det)
+            } else {
+                (a, b)
+            }
+        };
+        let (dpdu, dpdv) = by_uv(e1, e2);
+        let mut point = SurfacePoint {
+            p,
+            n,
+            ns: n,
+            uv,
+            tangent: dpdu.try_normalize().unwrap_or_else(|| e1.normalize()),
+            dpdu,
+            dpdv,
+            dndu: DVec3::ZERO,
+            dndv: DVec3::ZERO,
+            primitive,
+        };
+        let Some(sh) = shading else {
+            return point;
+        };
+        let big_n = sh.n[0] * b0 + sh.n[1] * b1 + sh.n[2] * b2;
+        let len = big_n.length();
+        if !(len > 1e-12 && len.is_finite()) {
+            return point;
         }
-        ((d1 * dv2 - d2 * dv1) / det).normalize_or_zero()
+        let ns = big_n / len;
+        // The shading normal stays on the geometric normal's side (which decides emission and the
+        // sides of dielectrics); meshes are wound so that this holds but at extreme normals.
+        let sign = if ns.dot(n) < 0.0 { -1.0 } else { 1.0 };
+        let (dnu, dnv) = by_uv(sh.n[1] - sh.n[0], sh.n[2] - sh.n[0]);
+        let unit = |d: DVec3| (d - ns * ns.dot(d)) / len;
+        point.ns = ns * sign;
+        point.dndu = unit(dnu) * sign;
+        point.dndv = unit(dnv) * sign;
+        if let Some(t) = sh.s {
+            let s = t[0] * b0 + t[1] * b1 + t[2] * b2;
+            if let Some(s) = s.try_normalize() {
+                point.tangent = s;
+            }
+        }
+        point
     }
 
     /// Uniform area sampling: barycentrics from two numbers (the square-root warp
@@ -120,6 +183,7 @@ mod tests {
             p: [DVec3::ZERO, DVec3::X, DVec3::Y],
             uv: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
             flip: false,
+            shading: NO_SHADING,
         }
     }
 

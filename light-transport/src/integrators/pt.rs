@@ -128,7 +128,7 @@ impl Estimator for PathTracer {
                                 } else {
                                     mis(pdf_solid, bsdf.pdf(wo, wi), self.heuristic)
                                 };
-                                l += beta * f * le * (wi.dot(p.n).abs() * w / pdf_solid);
+                                l += beta * f * le * (wi.dot(p.ns).abs() * w / pdf_solid);
                             }
                         }
                     }
@@ -150,7 +150,7 @@ impl Estimator for PathTracer {
             if bs.pdf == 0.0 || bs.f.is_black() {
                 break;
             }
-            beta *= bs.f * (bs.wi.dot(p.n).abs() / bs.pdf);
+            beta *= bs.f * (bs.wi.dot(p.ns).abs() / bs.pdf);
             specular = bs.delta;
             last_pdf = bs.pdf;
             if let Some(after) = self.roulette_after

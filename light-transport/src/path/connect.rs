@@ -107,7 +107,7 @@ pub fn connect_unoccluded(
     let fq = if s == 1 {
         qs.le(scene, pt)
     } else {
-        qs.f(pt, TransportMode::Importance)
+        qs.f(scene, pt, TransportMode::Importance)
     };
     if t == 1 {
         let w = (qs.p() - pt.p()).normalize_or_zero();
@@ -119,7 +119,7 @@ pub fn connect_unoccluded(
             raster: Some(raster),
         });
     }
-    let fp = pt.f(qs, TransportMode::Radiance);
+    let fp = pt.f(scene, qs, TransportMode::Radiance);
     let value = qs.beta * fq * fp * pt.beta * geometry(scene, qs, pt);
     (!value.is_black()).then_some(Connection {
         value,

@@ -103,13 +103,37 @@ impl Vertex {
         pdf
     }
 
-    /// BSDF value at this vertex for light arriving from `next` (or the adjoint).
-    pub fn f(&self, next: &Vertex, mode: TransportMode) -> Rgb {
+    /// The factor shading normals put on this vertex's BSDF in the path integral, for a walk in
+    /// `mode` that arrived from `wo` and leaves toward `wi` (Veach 1997 §5.3). The measurement
+    /// contribution keeps geometric cosines in its geometry terms, so the scattering of light
+    /// arriving along `w_l` carries `|w_l · n_s| / |w_l · n_g|`: the light side is `wi` for camera
+    /// subpaths (radiance) and `wo` for light subpaths (importance), where it is the adjoint
+    /// correction `|wo·n_s| |wi·n_g| / (|wo·n_g| |wi·n_s|)` of the walk's `|wi·n_s|`. 1 without
+    /// shading normals. [`crate::scene::Scene::adjoint_correction`] off uses the radiance form in
+    /// both modes (deliberately wrong, for tests).
+    #[inline]
+    pub fn shading_factor(&self, scene: &Scene, wo: DVec3, wi: DVec3, mode: TransportMode) -> f64 {
+        let pt = &self.point;
+        if !pt.shaded() {
+            return 1.0;
+        }
+        let w = match mode {
+            TransportMode::Importance if scene.adjoint_correction => wo,
+            _ => wi,
+        };
+        let g = w.dot(pt.n).abs();
+        if g > 0.0 { w.dot(pt.ns).abs() / g } else { 0.0 }
+    }
+
+    /// BSDF value at this vertex for light arriving from `next` (or the adjoint), times the
+    /// shading-normal factor ([`Vertex::shading_factor`]): the vertex's factor of the measurement
+    /// contribution, whose geometry terms use geometric cosines.
+    pub fn f(&self, scene: &Scene, next: &Vertex, mode: TransportMode) -> Rgb {
         let Some(b) = &self.bsdf else {
             return Rgb::BLACK;
         };
         let wi = (next.p() - self.p()).normalize_or_zero();
-        b.eval(self.wo, wi, mode)
+        b.eval(self.wo, wi, mode) * self.shading_factor(scene, self.wo, wi, mode)
     }
 
     /// Area density at `next` of sampling `next` from this vertex, the walk having arrived from

@@ -6,7 +6,7 @@
 
 use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
-use crate::geometry::{Ray, SurfacePoint, offset_origin};
+use crate::geometry::{Ray, offset_origin};
 use crate::sampler::{
     CAMERA_BLOCK, CAMERA_STREAM, LIGHT_BLOCK, LIGHT_STREAM, SampleStream, layout,
 };
@@ -55,13 +55,7 @@ pub fn camera_subpath<S: SampleStream>(
     let cs = scene.camera.sample_ray(film, lens);
     path.push(Vertex {
         kind: VertexKind::Camera,
-        point: SurfacePoint {
-            p: cs.ray.o,
-            n: scene.camera.forward(),
-            uv: [0.0; 2],
-            dpdu: crate::math::DVec3::X,
-            primitive: u32::MAX,
-        },
+        point: scene.camera.lens_point(cs.ray.o),
         wo: crate::math::DVec3::ZERO,
         bsdf: None,
         beta: Rgb::WHITE,
@@ -201,7 +195,8 @@ fn random_walk<S: SampleStream>(
             break;
         }
         let n = vert.n();
-        beta *= bs.f * (bs.wi.dot(n).abs() / bs.pdf);
+        let shading = vert.shading_factor(scene, vert.wo, bs.wi, mode);
+        beta *= bs.f * (shading * bs.wi.dot(n).abs() / bs.pdf);
         if !beta.is_finite() {
             break;
         }

@@ -231,7 +231,8 @@ pub fn retrace(scene: &Scene, sub: &mut [Vertex], mode: TransportMode) -> usize 
         if !(pdf > 0.0) {
             return i + 1;
         }
-        beta *= f * (wi.dot(sub[i].n()).abs() / pdf);
+        let shading = sub[i].shading_factor(scene, sub[i].wo, wi, mode);
+        beta *= f * (shading * wi.dot(sub[i].n()).abs() / pdf);
         if !beta.is_finite() {
             return i + 1;
         }

@@ -122,13 +122,7 @@ pub fn lens_endpoint(scene: &Scene, rng: &mut ChainRng) -> Option<Vertex> {
     let cs = scene.camera.sample_ray([0.5, 0.5], u);
     Some(endpoint(
         VertexKind::Camera,
-        SurfacePoint {
-            p: cs.ray.o,
-            n: scene.camera.forward(),
-            uv: [0.0; 2],
-            dpdu: DVec3::X,
-            primitive: u32::MAX,
-        },
+        scene.camera.lens_point(cs.ray.o),
     ))
 }
 

@@ -4,7 +4,9 @@ use super::description::*;
 use crate::accel::{Bvh, Primitive};
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
-use crate::geometry::{Hit, Ray, Sphere, SurfacePoint, Triangle, offset_origin};
+use crate::geometry::{
+    Hit, NO_SHADING, Ray, Sphere, SurfacePoint, Triangle, TriangleShading, offset_origin,
+};
 use crate::light::{LightDistribution, LightKind};
 use crate::math::{DVec3, Frame};
 use crate::spectrum::Rgb;
@@ -35,6 +37,10 @@ pub struct Scene {
     pub bounds: (DVec3, DVec3),
     /// Warnings and ignored directives from loading, for the user.
     pub notes: Vec<String>,
+    /// Whether light subpaths carry the adjoint correction of shading normals (Veach 1997 §5.3;
+    /// see [`crate::path::Vertex::shading_factor`]). Always on; off only to show that the
+    /// unbiasedness tests see its absence.
+    pub adjoint_correction: bool,
 }
 
 impl Scene {
@@ -49,6 +55,7 @@ impl Scene {
         let camera = Camera::new(cam, w, h)?;
         let mut prims = Vec::new();
         let mut prim_mat = Vec::new();
+        let mut shading: Vec<TriangleShading> = Vec::new();
         let mut emissive: Vec<(u32, AreaLightDesc)> = Vec::new();
         let material_index = |m: usize, what: &str| -> Result<u32> {
             let n = desc.materials.len() + 1;
@@ -79,14 +86,19 @@ impl Scene {
                         .map(|i| uvs.get(i as usize).copied().unwrap_or([0.0, 0.0])),
                     None => [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
                 };
-                let t = Triangle {
+                let mut t = Triangle {
                     p,
                     uv,
                     flip: mesh.flip_normals,
+                    shading: NO_SHADING,
                 };
                 let a = t.area();
                 if !(a > 0.0 && a.is_finite()) {
                     continue; // loaders drop and report degenerate triangles; never trace them
+                }
+                if let Some(sh) = triangle_shading(mesh, *tri, t.normal())? {
+                    t.shading = shading.len() as u32;
+                    shading.push(sh);
                 }
                 area += a;
                 prims.push(Primitive::Triangle(t));
@@ -164,7 +176,7 @@ impl Scene {
                 emissive.push((i, al));
             }
         }
-        let bvh = Bvh::new(prims);
+        let bvh = Bvh::with_shading(prims, shading);
         // The BVH stores primitives in its leaf order: carry the per-primitive tables over.
         let mut new_index = vec![0u32; bvh.original.len()];
         for (new, &old) in bvh.original.iter().enumerate() {
@@ -249,6 +261,7 @@ impl Scene {
             camera,
             bounds,
             notes,
+            adjoint_correction: true,
         })
     }
 
@@ -277,11 +290,15 @@ impl Scene {
         !self.bvh.occluded(o, v / dist, dist)
     }
 
-    /// The BSDF at a surface point.
+    /// The BSDF at a surface point: in the shading frame (shading normal, shading tangent), the
+    /// geometric normal deciding the sides of the surface.
     pub fn bsdf(&self, point: &SurfacePoint) -> Result<Bsdf> {
         let m = self.primitive_material[point.primitive as usize] as usize;
-        let frame = Frame::from_normal_tangent(point.n, point.dpdu);
-        Bsdf::from_material(&self.materials, &self.textures, m, point.uv, frame)
+        let frame = Frame::from_normal_tangent(point.ns, point.tangent);
+        Ok(
+            Bsdf::from_material(&self.materials, &self.textures, m, point.uv, frame)?
+                .with_geometric_normal(point.n),
+        )
     }
 
     /// The light at a primitive, if it is emissive.
@@ -354,4 +371,46 @@ pub fn validate_resolution(w: usize, h: usize) -> Result<()> {
         });
     }
     Ok(())
+}
+
+/// The shading data of triangle `tri` of `mesh` (`None` when the mesh has no normals, or they
+/// are the flat normal `n` at every vertex). The loader winds triangles so that the sum of their
+/// vertex normals lies on the side of `n`; where an interpolated normal does not, the hit point
+/// flips it (see [`Triangle::point_shaded`]).
+fn triangle_shading(mesh: &MeshDesc, tri: [u32; 3], n: DVec3) -> Result<Option<TriangleShading>> {
+    let Some(normals) = &mesh.normals else {
+        return Ok(None);
+    };
+    let get = |v: &[DVec3], i: u32, what: &str| {
+        v.get(i as usize).copied().ok_or_else(|| {
+            Error::InvalidScene(format!(
+                "mesh{}: {what} index {i} out of range ({} given)",
+                at(&mesh.location),
+                v.len()
+            ))
+        })
+    };
+    let mut ns = [DVec3::ZERO; 3];
+    for (k, &i) in tri.iter().enumerate() {
+        let v = get(normals, i, "normal")?;
+        let v = v.try_normalize().ok_or_else(|| {
+            Error::InvalidScene(format!(
+                "mesh{}: vertex normal {i} is zero or not finite ({v})",
+                at(&mesh.location)
+            ))
+        })?;
+        ns[k] = v;
+    }
+    if ns.iter().all(|v| (*v - n).length() < 1e-12) {
+        return Ok(None);
+    }
+    let s = match &mesh.tangents {
+        Some(t) => Some([
+            get(t, tri[0], "tangent")?,
+            get(t, tri[1], "tangent")?,
+            get(t, tri[2], "tangent")?,
+        ]),
+        None => None,
+    };
+    Ok(Some(TriangleShading { n: ns, s }))
 }

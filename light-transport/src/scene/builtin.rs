@@ -8,14 +8,20 @@
 //! * `ring` — a faceted mirror ring on a diffuse floor under a small low light, seen from close
 //!   up: the reflection caustic inside the ring fills the frame (after the zoomed ring of the
 //!   practical-MLT paper, Figure 11), paths of the form `L S D E` that BDPT samples poorly and the
-//!   caustic perturbation samples well.
+//!   caustic perturbation samples well;
+//! * `pool` — a pool of water (a wavy surface of 2048 triangles with smooth interpolated normals,
+//!   a dielectric of η = 1.33) over a diffuse floor between walls, under a small bright light, seen
+//!   from above the water: the floor's caustic is seen through the surface, `L S D S E` paths (the
+//!   specular-chain case of manifold exploration);
+//! * `pool-lamp` — the same pool lit also by a small lamp under water on the far wall, itself seen
+//!   through the surface (`L S E`, and `L D S E` light on the floor).
 
 use super::description::*;
 use crate::math::{DMat4, DVec3};
 use crate::spectrum::Rgb;
 
 /// Names of the built-in scenes.
-pub const BUILTIN: [&str; 4] = ["cornell", "caustic", "door", "ring"];
+pub const BUILTIN: [&str; 6] = ["cornell", "caustic", "door", "ring", "pool", "pool-lamp"];
 
 /// The built-in scene called `name`.
 pub fn builtin(name: &str) -> Option<SceneDescription> {
@@ -24,6 +30,8 @@ pub fn builtin(name: &str) -> Option<SceneDescription> {
         "caustic" => Some(caustic()),
         "door" => Some(door()),
         "ring" => Some(ring()),
+        "pool" => Some(pool(false)),
+        "pool-lamp" => Some(pool(true)),
         _ => None,
     }
 }
@@ -102,6 +110,7 @@ impl SceneBuilder {
         self.d.meshes.push(MeshDesc {
             positions: vec![p, p + a, p + a + b, p + b],
             normals: None,
+            tangents: None,
             uvs: Some(vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]),
             indices: vec![[0, 1, 2], [0, 2, 3]],
             material,
@@ -109,6 +118,28 @@ impl SceneBuilder {
                 radiance,
                 two_sided: false,
             }),
+            flip_normals: false,
+            location: None,
+        });
+    }
+
+    /// A triangle mesh with optional per-vertex shading normals (geometric normals along
+    /// `(p1 − p0) × (p2 − p0)`).
+    pub fn mesh(
+        &mut self,
+        positions: Vec<DVec3>,
+        normals: Option<Vec<DVec3>>,
+        indices: Vec<[u32; 3]>,
+        material: usize,
+    ) {
+        self.d.meshes.push(MeshDesc {
+            positions,
+            normals,
+            tangents: None,
+            uvs: None,
+            indices,
+            material,
+            area_light: None,
             flip_normals: false,
             location: None,
         });
@@ -124,6 +155,60 @@ impl SceneBuilder {
         self.quad(lo + x, y, z, material, None); // x = hi (+x)
         self.quad(lo, x, z, material, None); // y = lo (−y)
         self.quad(lo + y, z, x, material, None); // y = hi (+y)
+    }
+
+    /// A sphere tessellated into `2 nu nv` triangles (`nu` around the `z` axis, `nv` from pole to
+    /// pole) carrying the sphere's exact normals at its vertices, and texture coordinates
+    /// `(φ/2π, θ/π)`: the mesh sphere of a modelling tool, shaded smooth. Coarse tessellations
+    /// make shading normals far from the facets' geometric normals.
+    pub fn mesh_sphere(
+        &mut self,
+        center: DVec3,
+        radius: f64,
+        nu: usize,
+        nv: usize,
+        material: usize,
+    ) {
+        let (mut positions, mut normals, mut uvs) = (Vec::new(), Vec::new(), Vec::new());
+        for j in 0..=nv {
+            for i in 0..=nu {
+                let (u, v) = (i as f64 / nu as f64, j as f64 / nv as f64);
+                let (phi, theta) = (u * std::f64::consts::TAU, v * std::f64::consts::PI);
+                let n = DVec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.sin() * phi.sin(),
+                    theta.cos(),
+                );
+                positions.push(center + n * radius);
+                normals.push(n);
+                uvs.push([u, v]);
+            }
+        }
+        let at = |i: usize, j: usize| (j * (nu + 1) + i) as u32;
+        let mut indices = Vec::new();
+        for j in 0..nv {
+            for i in 0..nu {
+                // Wound outward (∂p/∂θ × ∂p/∂φ); at the poles one triangle of each pair would
+                // have two coincident vertices and is left out.
+                if j > 0 {
+                    indices.push([at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
+                }
+                if j + 1 < nv {
+                    indices.push([at(i, j), at(i, j + 1), at(i + 1, j + 1)]);
+                }
+            }
+        }
+        self.d.meshes.push(MeshDesc {
+            positions,
+            normals: Some(normals),
+            tangents: None,
+            uvs: Some(uvs),
+            indices,
+            material,
+            area_light: None,
+            flip_normals: false,
+            location: None,
+        });
     }
 
     /// A sphere.
@@ -435,9 +520,161 @@ fn ring() -> SceneDescription {
     s.d
 }
 
+/// Height of the pool's water surface at `(x, z)`, and its gradient `(∂h/∂x, ∂h/∂z)`.
+pub fn pool_wave(x: f64, z: f64) -> (f64, [f64; 2]) {
+    let a = 0.035;
+    let h =
+        1.0 + a * ((2.1 * x + 0.4).sin() + (1.7 * z - 0.3).sin() + 0.6 * (1.3 * x + 2.9 * z).sin());
+    let c = 0.6 * (1.3 * x + 2.9 * z).cos();
+    let dx = a * (2.1 * (2.1 * x + 0.4).cos() + 1.3 * c);
+    let dz = a * (1.7 * (1.7 * z - 0.3).cos() + 2.9 * c);
+    (h, [dx, dz])
+}
+
+fn pool(lamp: bool) -> SceneDescription {
+    let mut s = SceneBuilder::new(
+        320,
+        240,
+        DVec3::new(0.0, 3.0, 3.6),
+        DVec3::new(0.0, 0.0, -0.2),
+        42.0,
+    );
+    let tiles = s.matte(0.75, 0.78, 0.8);
+    let wall = s.matte(0.35, 0.55, 0.65);
+    let deck = s.matte(0.6, 0.58, 0.55);
+    let black = s.matte(0.0, 0.0, 0.0);
+    let water = s.material(MaterialDesc::Glass {
+        eta: 1.33,
+        alpha_u: 0.0,
+        alpha_v: 0.0,
+        kr: Rgb::WHITE,
+        kt: Rgb::WHITE,
+    });
+    let (half, depth) = (2.0, 1.3);
+    // Floor of the basin, and its four walls (normals inward).
+    s.quad(
+        DVec3::new(-half, 0.0, -half),
+        DVec3::Z * 2.0 * half,
+        DVec3::X * 2.0 * half,
+        tiles,
+        None,
+    );
+    s.quad(
+        DVec3::new(-half, 0.0, -half),
+        DVec3::X * 2.0 * half,
+        DVec3::Y * depth,
+        wall,
+        None,
+    );
+    s.quad(
+        DVec3::new(-half, 0.0, half),
+        DVec3::Y * depth,
+        DVec3::X * 2.0 * half,
+        wall,
+        None,
+    );
+    s.quad(
+        DVec3::new(-half, 0.0, -half),
+        DVec3::Y * depth,
+        DVec3::Z * 2.0 * half,
+        wall,
+        None,
+    );
+    s.quad(
+        DVec3::new(half, 0.0, -half),
+        DVec3::Z * 2.0 * half,
+        DVec3::Y * depth,
+        wall,
+        None,
+    );
+    // The deck around the pool, at the top of the walls.
+    for (p, a, b) in [
+        (
+            DVec3::new(-6.0, depth, -6.0),
+            DVec3::Z * 4.0,
+            DVec3::X * 12.0,
+        ),
+        (
+            DVec3::new(-6.0, depth, half),
+            DVec3::Z * 4.0,
+            DVec3::X * 12.0,
+        ),
+        (
+            DVec3::new(-6.0, depth, -half),
+            DVec3::Z * 2.0 * half,
+            DVec3::X * 4.0,
+        ),
+        (
+            DVec3::new(half, depth, -half),
+            DVec3::Z * 2.0 * half,
+            DVec3::X * 4.0,
+        ),
+    ] {
+        s.quad(p, a, b, deck, None);
+    }
+    // The water: a 32 × 32 grid of the wave, smooth normals from its gradient.
+    let n = 32;
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let x = -half + 2.0 * half * i as f64 / n as f64;
+            let z = -half + 2.0 * half * j as f64 / n as f64;
+            let (h, [dx, dz]) = pool_wave(x, z);
+            positions.push(DVec3::new(x, h, z));
+            normals.push(DVec3::new(-dx, 1.0, -dz).normalize());
+        }
+    }
+    let at = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut indices = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            // Wound so that the geometric normal points up (+y), out of the water.
+            indices.push([at(i, j), at(i, j + 1), at(i + 1, j + 1)]);
+            indices.push([at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
+        }
+    }
+    s.mesh(positions, Some(normals), indices, water);
+    // A small bright light above the water.
+    s.quad(
+        DVec3::new(-0.9, 3.6, -0.9),
+        DVec3::X * 0.25,
+        DVec3::Z * 0.25,
+        black,
+        Some(Rgb::new(700.0, 680.0, 640.0)),
+    );
+    if lamp {
+        // A small lamp under water in the far wall, facing the camera.
+        s.quad(
+            DVec3::new(0.3, 0.45, -half + 1e-3),
+            DVec3::X * 0.2,
+            DVec3::Y * 0.12,
+            black,
+            Some(Rgb::new(120.0, 140.0, 160.0)),
+        );
+    }
+    s.d
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_pool_surface_faces_up_with_smooth_normals() {
+        let d = builtin("pool").unwrap();
+        let water = d.meshes.iter().find(|m| m.normals.is_some()).unwrap();
+        for t in &water.indices {
+            let p = t.map(|i| water.positions[i as usize]);
+            assert!((p[1] - p[0]).cross(p[2] - p[0]).y > 0.0);
+        }
+        // The wave's gradient against finite differences.
+        let (x, z, e) = (0.3, -0.7, 1e-6);
+        let (_, [dx, dz]) = pool_wave(x, z);
+        let fx = (pool_wave(x + e, z).0 - pool_wave(x - e, z).0) / (2.0 * e);
+        let fz = (pool_wave(x, z + e).0 - pool_wave(x, z - e).0) / (2.0 * e);
+        assert!((dx - fx).abs() < 1e-8 && (dz - fz).abs() < 1e-8);
+    }
 
     #[test]
     fn look_at_axes() {

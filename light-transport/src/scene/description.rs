@@ -107,6 +107,9 @@ pub struct MeshDesc {
     /// its oriented geometric normal lies on the same side as the sum of its vertex normals, as
     /// pbrt orients geometric normals towards shading normals.
     pub normals: Option<Vec<DVec3>>,
+    /// Optional shading tangents per vertex (pbrt `"S"`, world space), the direction of
+    /// anisotropy of BSDFs.
+    pub tangents: Option<Vec<DVec3>>,
     /// Optional texture coordinates per vertex.
     pub uvs: Option<Vec<[f64; 2]>>,
     /// Triangles (indices into the vertex arrays).

@@ -133,3 +133,104 @@ pub fn blocks_and_stats(runs: Vec<(Film, MetropolisStats)>) -> (Vec<Vec<f64>>, S
         .collect();
     (images, all)
 }
+
+/// A test scene for shading normals: a box (diffuse walls, open at the front) under a ceiling
+/// light, holding four coarsely tessellated mesh spheres with smooth vertex normals — matte
+/// (8 × 4 facets), layered plastic (10 × 5), rough metal (8 × 4) and smooth glass (12 × 6) —
+/// whose shading normals are up to ~40° from their facets' geometric normals.
+pub fn smooth_spheres() -> light_transport::scene::SceneDescription {
+    use light_transport::math::DVec3;
+    use light_transport::scene::builtin::SceneBuilder;
+    use light_transport::scene::{MaterialDesc, RgbTexture};
+    use light_transport::spectrum::Rgb;
+    let mut s = SceneBuilder::new(
+        36,
+        30,
+        DVec3::new(0.0, 1.0, 6.8),
+        DVec3::new(0.0, 1.0, 0.0),
+        19.5,
+    );
+    let white = s.matte(0.7, 0.7, 0.7);
+    let red = s.matte(0.6, 0.1, 0.05);
+    let black = s.matte(0.0, 0.0, 0.0);
+    let plastic = s.material(MaterialDesc::Layered {
+        kd: RgbTexture::Constant(Rgb::new(0.2, 0.3, 0.5)),
+        ks: Rgb::splat(0.8),
+        alpha_u: 0.1,
+        alpha_v: 0.1,
+        eta: 1.5,
+    });
+    let metal = s.material(MaterialDesc::Metal {
+        eta: Rgb::new(0.2, 0.92, 1.1),
+        k: Rgb::new(3.9, 2.45, 2.14),
+        alpha_u: 0.2,
+        alpha_v: 0.2,
+    });
+    let glass = s.material(MaterialDesc::Glass {
+        eta: 1.5,
+        alpha_u: 0.0,
+        alpha_v: 0.0,
+        kr: Rgb::WHITE,
+        kt: Rgb::WHITE,
+    });
+    let (x, y, z) = (DVec3::X * 2.0, DVec3::Y * 2.0, DVec3::Z * 2.0);
+    let o = DVec3::new(-1.0, 0.0, -1.0);
+    s.quad(o, z, x, white, None); // floor
+    s.quad(o + y, x, z, white, None); // ceiling
+    s.quad(o, x, y, white, None); // back
+    s.quad(o, y, z, red, None); // left
+    s.quad(o + x, z, y, white, None); // right
+    s.quad(
+        DVec3::new(-0.25, 1.98, -0.25),
+        DVec3::X * 0.5,
+        DVec3::Z * 0.5,
+        black,
+        Some(Rgb::splat(15.0)),
+    );
+    s.mesh_sphere(DVec3::new(-0.5, 0.35, -0.4), 0.35, 8, 4, white);
+    s.mesh_sphere(DVec3::new(0.1, 1.2, -0.5), 0.3, 10, 5, plastic);
+    s.mesh_sphere(DVec3::new(0.55, 1.0, -0.6), 0.25, 8, 4, metal);
+    s.mesh_sphere(DVec3::new(0.45, 0.35, 0.3), 0.35, 12, 6, glass);
+    s.finish()
+}
+
+/// A test scene where the adjoint correction of shading normals matters everywhere: a matte
+/// floor (`y = 0`, geometric normal `+y`) whose vertex normals all lean 30° toward `+x`, seen from
+/// above and lit at grazing angles by a wall light on the `+x` side. At the floor the light-side
+/// factor `|ω_l·n_s| / |ω_l·n_g|` is about 2, the camera-side one about 0.9.
+pub fn tilted_floor() -> light_transport::scene::SceneDescription {
+    use light_transport::math::DVec3;
+    use light_transport::scene::builtin::SceneBuilder;
+    use light_transport::spectrum::Rgb;
+    let mut s = SceneBuilder::new(
+        36,
+        30,
+        DVec3::new(-0.5, 3.0, 1.2),
+        DVec3::new(0.0, 0.0, 0.0),
+        50.0,
+    );
+    let floor = s.matte(0.6, 0.6, 0.6);
+    let black = s.matte(0.0, 0.0, 0.0);
+    let a = 30f64.to_radians();
+    let ns = DVec3::new(a.sin(), a.cos(), 0.0);
+    s.mesh(
+        vec![
+            DVec3::new(-3.0, 0.0, -3.0),
+            DVec3::new(-3.0, 0.0, 3.0),
+            DVec3::new(3.0, 0.0, 3.0),
+            DVec3::new(3.0, 0.0, -3.0),
+        ],
+        Some(vec![ns; 4]),
+        vec![[0, 1, 2], [0, 2, 3]],
+        floor,
+    );
+    // The wall light at x = 3.5, facing −x.
+    s.quad(
+        DVec3::new(3.5, 0.3, -2.0),
+        DVec3::Z * 4.0,
+        DVec3::Y * 1.2,
+        black,
+        Some(Rgb::splat(4.0)),
+    );
+    s.finish()
+}

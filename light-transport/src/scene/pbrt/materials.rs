@@ -200,6 +200,17 @@ pub(crate) fn material(
         scope,
         what,
     };
+    for map in ["bumpmap", "normalmap", "displacement"] {
+        if params.has(map) {
+            return Err(params.error(
+                map,
+                format!(
+                    "{what}: bump, normal and displacement maps are not supported (shading \
+                     normals come from the meshes' vertex normals \"N\")"
+                ),
+            ));
+        }
+    }
     let m = match kind {
         "matte" => {
             let kd = c.rgb_texture("Kd", 0.5)?;

@@ -453,6 +453,11 @@ impl ParamList {
         self.triples(name, ParamType::Normal3, "\"normal3\" (or \"normal\")")
     }
 
+    /// A `vector3` array.
+    pub fn vectors(&self, name: &str) -> Result<Option<Vec<DVec3>>> {
+        self.triples(name, ParamType::Vector3, "\"vector3\" (or \"vector\")")
+    }
+
     /// A single `point3`.
     pub fn point(&self, name: &str) -> Result<Option<DVec3>> {
         match self.points(name)? {

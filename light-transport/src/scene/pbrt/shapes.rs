@@ -1,7 +1,9 @@
 //! `Shape "trianglemesh"|"plymesh"|"sphere"` → world-space [`MeshDesc`] / [`SphereDesc`].
 //!
 //! Meshes: vertices are transformed by the CTM, normals by its inverse transpose (flipped by
-//! `ReverseOrientation`, as pbrt-v4 does). `flip_normals` is pbrt's `reverseOrientation ^
+//! `ReverseOrientation`, as pbrt-v4 does), tangents `"S"` as vectors. Normals and tangents must be
+//! finite and non-zero, and one per vertex, or the file is refused at the parameter's line; the
+//! renderer shades with the interpolated normals. `flip_normals` is pbrt's `reverseOrientation ^
 //! transformSwapsHandedness`, relative to the winding normal `(p1 − p0) × (p2 − p0)`. When normals
 //! are given, pbrt orients the geometric normal towards the shading normal; the loader reproduces
 //! that by swapping the winding of triangles whose oriented winding normal disagrees with the sum
@@ -41,6 +43,7 @@ pub(crate) struct ShapeContext<'a> {
 struct ObjectMesh {
     positions: Vec<DVec3>,
     normals: Option<Vec<DVec3>>,
+    tangents: Option<Vec<DVec3>>,
     uvs: Option<Vec<[f64; 2]>>,
     triangles: Vec<[u32; 3]>,
 }
@@ -85,9 +88,22 @@ pub(crate) fn shape(
                     "displacement.edgelength",
                 ],
             )?;
+            if let Some(ns) = &m.normals
+                && let Some(i) = ns.iter().position(|v| !usable_direction(*v))
+            {
+                return Err(Error::scene(
+                    &at,
+                    format!(
+                        "PLY file {}: vertex normal {i} is {} (normals must be finite and non-zero)",
+                        path.display(),
+                        ns[i]
+                    ),
+                ));
+            }
             let mesh = ObjectMesh {
                 positions: m.positions,
                 normals: m.normals,
+                tangents: None,
                 uvs: m.uvs,
                 triangles: m.triangles,
             };
@@ -161,13 +177,24 @@ fn triangle_mesh(params: &ParamList) -> Result<ObjectMesh> {
         .map(|c| [c[0] as u32, c[1] as u32, c[2] as u32])
         .collect();
     let normals = params.normals("N")?;
-    if let Some(ns) = &normals
-        && ns.len() != n
-    {
-        return Err(params.error(
-            "N",
-            format!("\"N\" has {} normals but \"P\" has {n} points", ns.len()),
-        ));
+    let tangents = params.vectors("S")?;
+    for (name, what, v) in [("N", "normals", &normals), ("S", "tangents", &tangents)] {
+        let Some(v) = v else { continue };
+        if v.len() != n {
+            return Err(params.error(
+                name,
+                format!("\"{name}\" has {} {what} but \"P\" has {n} points", v.len()),
+            ));
+        }
+        if let Some(i) = v.iter().position(|d| !usable_direction(*d)) {
+            return Err(params.error(
+                name,
+                format!(
+                    "\"{name}\" entry {i} is {} ({what} must be finite and non-zero)",
+                    v[i]
+                ),
+            ));
+        }
     }
     if params.has("uv") && params.has("st") {
         return Err(params.error("st", "give either \"uv\" or \"st\", not both"));
@@ -188,9 +215,15 @@ fn triangle_mesh(params: &ParamList) -> Result<ObjectMesh> {
     Ok(ObjectMesh {
         positions,
         normals,
+        tangents,
         uvs,
         triangles,
     })
+}
+
+/// Whether a normal or tangent can be normalised.
+fn usable_direction(v: DVec3) -> bool {
+    v.is_finite() && v.length_squared() > 0.0
 }
 
 fn build_mesh(
@@ -229,10 +262,14 @@ fn build_mesh(
             None
         }
     };
+    let tangents = mesh.tangents.map(|ts| {
+        ts.iter()
+            .map(|&t| ctx.ctm.transform_vector3(t).normalize_or_zero())
+            .collect::<Vec<_>>()
+    });
     let sign = if flip { -1.0 } else { 1.0 };
     let total = mesh.triangles.len();
     let mut kept = Vec::with_capacity(total);
-    let mut deviating = 0usize;
     for mut t in mesh.triangles {
         let [a, b, c] = t.map(|i| positions[i as usize]);
         let (e1, e2) = (b - a, c - a);
@@ -242,15 +279,11 @@ fn build_mesh(
         if !(len.is_finite() && len > 1e-12 * scale) {
             continue;
         }
-        let mut ng = cross * (sign / len);
+        let ng = cross * (sign / len);
         if let Some(ns) = &normals {
             let n = t.map(|i| ns[i as usize]);
             if (n[0] + n[1] + n[2]).dot(ng) < 0.0 {
                 t.swap(1, 2);
-                ng = -ng;
-            }
-            if n.iter().any(|v| 1.0 - v.dot(ng) > 1e-3) {
-                deviating += 1;
             }
         }
         kept.push(t);
@@ -265,17 +298,7 @@ fn build_mesh(
             ctx.location.clone(),
         ));
     }
-    if deviating > 0 {
-        desc.warnings.push((
-            format!(
-                "{what}: the normals \"N\" of {deviating} of {} triangles deviate from the \
-                 geometric normal (1 − cos > 1e-3); they are kept in the mesh, but the renderer \
-                 shades with geometric normals",
-                kept.len()
-            ),
-            ctx.location.clone(),
-        ));
-    }
+
     if kept.is_empty() {
         if ctx.area_light.is_some() {
             return Err(Error::scene(
@@ -292,6 +315,7 @@ fn build_mesh(
     desc.meshes.push(MeshDesc {
         positions,
         normals,
+        tangents,
         uvs: mesh.uvs,
         indices: kept,
         material: ctx.material,
