@@ -13,6 +13,7 @@ pub mod film;
 pub mod geometry;
 pub mod integrators;
 pub mod light;
+pub mod manifold;
 pub mod math;
 pub mod metropolis;
 pub mod path;

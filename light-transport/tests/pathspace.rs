@@ -296,22 +296,29 @@ fn erpt_settings() -> ErptSettings {
     s
 }
 
-fn erpt_runs<E: Estimator>(scene: &Scene, e: &E) -> Vec<Vec<f64>> {
+/// ERPT images of 8 independent runs of `spp` seeds per pixel.
+fn erpt_runs<E: Estimator>(scene: &Scene, e: &E, spp: f64) -> Vec<Vec<f64>> {
     (0..8)
         .map(|r| {
-            let (film, _) = render(scene, e, Budget::SamplesPerPixel(4.0), 700 + r, |_, _| true);
+            let (film, _) = render(scene, e, Budget::SamplesPerPixel(spp), 700 + r, |_, _| true);
             assert_eq!(film.discarded, 0);
             blocks(&Image::from_film(&film))
         })
         .collect()
 }
 
+/// The pool's seeds are path-traced paths through a smooth water surface: its floor caustic seen
+/// through the water is found by rare, bright seeds, so batch means at 4 seeds per pixel are
+/// heavy-tailed and the t-test is anti-conservative there (4 seeds per pixel gave p = 2e-8 from
+/// one corner block whose rare bright paths no run had found, z = −9.6; with 32, p = 0.42). The
+/// pool scenes get 16.
 #[test]
 fn erpt_converges_to_bdpt_on_every_builtin_scene() {
     for name in builtin::BUILTIN {
         let scene = scene(name);
         let erpt = Erpt::new(&scene, erpt_settings()).unwrap();
-        let p = min_p(&erpt_runs(&scene, &erpt), &bdpt_batches(&scene));
+        let spp = if name.starts_with("pool") { 16.0 } else { 4.0 };
+        let p = min_p(&erpt_runs(&scene, &erpt, spp), &bdpt_batches(&scene));
         let (stats, chains) = erpt.statistics();
         println!(
             "{name}: p = {p:.3e}, e_d = {:.3e}, {chains} chains, acceptance {:.1}%",
@@ -370,7 +377,7 @@ impl Estimator for ErptWithoutMis {
 fn erpt_without_mis_on_seeds_is_caught() {
     let scene = scene("cornell");
     let broken = ErptWithoutMis(Erpt::new(&scene, erpt_settings()).unwrap());
-    let p = min_p(&erpt_runs(&scene, &broken), &bdpt_batches(&scene));
+    let p = min_p(&erpt_runs(&scene, &broken, 4.0), &bdpt_batches(&scene));
     println!("ERPT without MIS: p = {p:.3e}");
     assert!(p < ALPHA, "ERPT without MIS was not caught (p = {p:.2e})");
 }

@@ -1,0 +1,33 @@
+//! Specular manifolds (Jakob & Marschner 2012, "Manifold exploration", §3.3 and §4): the
+//! constraint that makes a chain of vertices specular, its block-tridiagonal Jacobian, the
+//! generalised geometry term through a specular chain, and the manifold walk that moves one
+//! endpoint of a chain while keeping it specular.
+//!
+//! * [`chain`] — a chain's vertices as the manifold sees them (differential geometry, reflection or
+//!   refraction with its relative index, the glossy offset `o` of eq. 11) and the scattering
+//!   direction that a given half vector prescribes;
+//! * [`constraint`] — the constraint `c_i` of eq. 6–7 and its Jacobian blocks;
+//! * [`tridiagonal`] — the O(n) block-tridiagonal solve (2×2 blocks), with a dense fallback;
+//! * [`geometry_term`] — the tangent map `−A⁻¹B` and the generalised geometry term (eq. 9);
+//! * [`walk`] — the predictor–corrector walk of §4 and its statistics.
+
+pub mod chain;
+pub mod constraint;
+pub mod geometry_term;
+pub mod tridiagonal;
+pub mod walk;
+
+pub use chain::{ChainVertex, Interaction, scatter};
+pub use constraint::{Blocks, constraint, constraint_in, jacobian_blocks};
+pub use geometry_term::{
+    ChainJacobian, chain_jacobian, generalized_geometry, generalized_geometry_reverse, tangent_map,
+};
+pub use tridiagonal::BlockTridiagonal;
+pub use walk::{
+    ManifoldSettings, NO_MATERIAL, WalkFailure, WalkStats, Walked, endpoint_plane, walk_manifold,
+};
+
+/// 2×2 blocks of the constraint Jacobian.
+pub type Mat2 = nalgebra::Matrix2<f64>;
+/// 2-vectors: a vertex's displacement in its tangent frame, or a constraint value.
+pub type Vec2 = nalgebra::Vector2<f64>;
