@@ -10,7 +10,7 @@ use light_transport::manifold::constraint::constraint_in;
 use light_transport::manifold::geometry_term::generalized_geometry_reverse;
 use light_transport::manifold::{
     ChainVertex, Interaction, ManifoldSettings, NO_MATERIAL, chain_jacobian, generalized_geometry,
-    walk_manifold,
+    trace_chain, walk_manifold,
 };
 use light_transport::math::DVec3;
 use light_transport::scene::builtin::SceneBuilder;
@@ -224,35 +224,7 @@ fn traced_chain(
         interaction: Interaction::Reflect,
         offset: [0.0; 2],
     };
-    let hit = scene.intersect(&Ray::new(x0, dir)).expect("hits the plane");
-    let s = ChainVertex {
-        point: hit.point,
-        material: scene.primitive_material[hit.point.primitive as usize],
-        interaction,
-        offset: [0.0; 2],
-    };
-    let wi = -dir;
-    let h = s.half_vector(wi).unwrap();
-    let eta = s.relative_eta(wi);
-    let wo = light_transport::manifold::scatter(
-        wi,
-        h,
-        eta,
-        matches!(interaction, Interaction::Refract { .. }),
-        s.point.n,
-    )
-    .unwrap();
-    let o = light_transport::geometry::offset_origin(s.p(), s.point.n, wo);
-    let end_hit = scene
-        .intersect(&Ray::new(o, wo))
-        .expect("hits the receiver");
-    let end = ChainVertex {
-        point: end_hit.point,
-        material: scene.primitive_material[end_hit.point.primitive as usize],
-        interaction: Interaction::Reflect,
-        offset: [0.0; 2],
-    };
-    vec![start, s, end]
+    trace_chain(scene, &start, dir, &[interaction]).expect("a traced chain")
 }
 
 fn surface_vertex(scene: &Scene, from: DVec3, to: DVec3) -> ChainVertex {
@@ -468,37 +440,9 @@ fn the_generalized_geometry_term_is_symmetric() {
     // A start on the floor, through the glass sphere (in and out), to the floor again.
     let start_p = DVec3::new(-2.0, 0.0, 0.3);
     let start = surface_vertex(&scene, start_p + DVec3::Y, start_p);
-    let mut chain = vec![start];
-    let mut dir = (DVec3::new(0.1, 1.0, 0.05) - start_p).normalize();
-    let mut origin = light_transport::geometry::offset_origin(start_p, start.point.n, dir);
-    for _ in 0..2 {
-        let hit = scene.intersect(&Ray::new(origin, dir)).unwrap();
-        let v = ChainVertex {
-            point: hit.point,
-            material: scene.primitive_material[hit.point.primitive as usize],
-            interaction: Interaction::Refract { eta: 1.5 },
-            offset: [0.0; 2],
-        };
-        let wi = -dir;
-        let wo = light_transport::manifold::scatter(
-            wi,
-            v.half_vector(wi).unwrap(),
-            v.relative_eta(wi),
-            true,
-            v.point.n,
-        )
-        .unwrap();
-        origin = light_transport::geometry::offset_origin(v.p(), v.point.n, wo);
-        dir = wo;
-        chain.push(v);
-    }
-    let hit = scene.intersect(&Ray::new(origin, dir)).unwrap();
-    chain.push(ChainVertex {
-        point: hit.point,
-        material: scene.primitive_material[hit.point.primitive as usize],
-        interaction: Interaction::Reflect,
-        offset: [0.0; 2],
-    });
+    let dir = (DVec3::new(0.1, 1.0, 0.05) - start_p).normalize();
+    let chain = trace_chain(&scene, &start, dir, &[Interaction::Refract { eta: 1.5 }; 2])
+        .expect("through the sphere to the ceiling");
     let n = chain.len();
     assert!(
         (chain[n - 1].p().y - 3.0).abs() < 1e-9,

@@ -246,13 +246,16 @@ fn veach_bidir_loads_binary_plys() {
     assert_eq!(glass_mesh.indices.len(), 7936);
     assert_eq!(s.ignored.len(), 3);
     assert_eq!(s.ignored[0].0, "Integrator \"bdpt\"");
-    // Smooth normals are reported (the renderer uses geometric normals), and name the PLY file.
-    assert!(
-        s.warnings
-            .iter()
-            .any(|(w, loc)| w.contains("Mesh002.ply") && loc.line == 30)
+    // The egg's smooth normals are read (and used: no warning any more).
+    assert_eq!(
+        glass_mesh.normals.as_ref().map(|n| n.len()),
+        Some(glass_mesh.positions.len())
     );
-    // Every vertex normal lies on the side of its triangle's oriented geometric normal.
+    assert!(
+        !s.warnings.iter().any(|(w, _)| w.contains("Mesh002.ply")),
+        "{:?}",
+        s.warnings
+    );
     for m in s.meshes.iter().filter(|m| m.normals.is_some()) {
         let ns = m.normals.as_ref().unwrap();
         for t in 0..m.indices.len() {
@@ -777,8 +780,10 @@ fn degenerate_triangles_are_dropped_with_a_warning() {
     assert!(loc.file.ends_with("bad.pbrt") && loc.line == 4);
 }
 
+/// Vertex normals that deviate from the geometric normal are shading normals now: kept,
+/// normalised, and no longer reported.
 #[test]
-fn shading_normals_that_deviate_are_reported() {
+fn shading_normals_are_kept_and_normalised() {
     let text = format!(
         "{HEADER}Shape \"trianglemesh\" \"point P\" [ 0 0 0  1 0 0  0 1 0 ] \
          \"normal N\" [ 0 0 1  0 0.6 0.8  0 0 1 ]\n\
@@ -786,10 +791,11 @@ fn shading_normals_that_deviate_are_reported() {
          WorldEnd\n"
     );
     let s = load_text(&text).unwrap();
-    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
-    assert!(s.warnings[0].0.contains("1 of 1 triangles deviate"));
-    assert_eq!(s.warnings[0].1.line, 4);
-    // normals are normalised
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert!(close(
+        s.meshes[0].normals.as_ref().unwrap()[1],
+        DVec3::new(0.0, 0.6, 0.8)
+    ));
     assert!(close(s.meshes[1].normals.as_ref().unwrap()[0], DVec3::Z));
 }
 

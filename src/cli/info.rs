@@ -27,8 +27,9 @@ pub fn run(a: InfoArgs) -> Result<(), CliError> {
         scene.camera.lens_radius
     );
     println!(
-        "geometry    {} meshes, {tris} triangles, {spheres} spheres; bounds {:.3} … {:.3}",
+        "geometry    {} meshes, {tris} triangles ({} smooth-shaded), {spheres} spheres; bounds {:.3} … {:.3}",
         d.meshes.len(),
+        scene.bvh.shading.len(),
         scene.bounds.0,
         scene.bounds.1
     );

@@ -9,12 +9,14 @@
 //! * [`constraint`] — the constraint `c_i` of eq. 6–7 and its Jacobian blocks;
 //! * [`tridiagonal`] — the O(n) block-tridiagonal solve (2×2 blocks), with a dense fallback;
 //! * [`geometry_term`] — the tangent map `−A⁻¹B` and the generalised geometry term (eq. 9);
-//! * [`walk`] — the predictor–corrector walk of §4 and its statistics.
+//! * [`walk`] — the predictor–corrector walk of §4 and its statistics;
+//! * [`vmf`] — the von Mises–Fisher distribution of the manifold perturbation's directions.
 
 pub mod chain;
 pub mod constraint;
 pub mod geometry_term;
 pub mod tridiagonal;
+pub mod vmf;
 pub mod walk;
 
 pub use chain::{ChainVertex, Interaction, scatter};
@@ -23,8 +25,10 @@ pub use geometry_term::{
     ChainJacobian, chain_jacobian, generalized_geometry, generalized_geometry_reverse, tangent_map,
 };
 pub use tridiagonal::BlockTridiagonal;
+pub use vmf::VonMisesFisher;
 pub use walk::{
-    ManifoldSettings, NO_MATERIAL, WalkFailure, WalkStats, Walked, endpoint_plane, walk_manifold,
+    ManifoldSettings, NO_MATERIAL, WalkFailure, WalkStats, Walked, endpoint_plane, trace_chain,
+    walk_manifold,
 };
 
 /// 2×2 blocks of the constraint Jacobian.

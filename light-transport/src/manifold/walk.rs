@@ -156,40 +156,37 @@ pub fn endpoint_plane(x: DVec3, n: DVec3, target: DVec3, target_n: DVec3) -> DVe
     if np == DVec3::ZERO { n } else { np }
 }
 
-/// Trace from `chain[0]` through the point `through`, repeating the chain's interactions at each
-/// hit, and end on the plane `(x_plane, n_plane)`: the new specular vertices and the end point.
-fn propagate(
+/// What a traced specular vertex must be: the material it must lie on (`None`: any), how it
+/// scatters, and its offset.
+type Expected = (Option<u32>, Interaction, [f64; 2]);
+
+/// Trace from `start` along `dir` through one specular vertex per entry of `expected`, repeating
+/// its interaction: the new specular vertices, and the origin and direction of the last segment.
+fn follow(
     scene: &Scene,
-    chain: &[ChainVertex],
-    through: DVec3,
-    x_plane: DVec3,
-    n_plane: DVec3,
-) -> Result<(Vec<ChainVertex>, DVec3), WalkFailure> {
-    let m = chain.len() - 2;
-    let start = &chain[0];
-    let mut dir = (through - start.p()).normalize_or_zero();
-    if dir == DVec3::ZERO {
-        return Err(WalkFailure::ChangedConfiguration);
-    }
+    start: &ChainVertex,
+    mut dir: DVec3,
+    expected: impl Iterator<Item = Expected>,
+    out: &mut Vec<ChainVertex>,
+) -> Result<(DVec3, DVec3), WalkFailure> {
     let mut origin = if start.material == NO_MATERIAL {
         start.p()
     } else {
         offset_origin(start.p(), start.point.n, dir)
     };
-    let mut out = Vec::with_capacity(m);
-    for old in &chain[1..=m] {
+    for (want, interaction, offset) in expected {
         let hit = scene
             .intersect(&Ray::new(origin, dir))
             .ok_or(WalkFailure::ChangedConfiguration)?;
         let material = scene.primitive_material[hit.point.primitive as usize];
-        if material != old.material {
+        if want.is_some_and(|m| m != material) {
             return Err(WalkFailure::ChangedConfiguration);
         }
         let v = ChainVertex {
             point: hit.point,
             material,
-            interaction: old.interaction,
-            offset: old.offset,
+            interaction,
+            offset,
         };
         let wi = -dir;
         let h = v.half_vector(wi).ok_or(WalkFailure::ChangedConfiguration)?;
@@ -205,12 +202,58 @@ fn propagate(
         dir = wo;
         out.push(v);
     }
-    let denom = dir.dot(n_plane);
-    let t = (x_plane - origin).dot(n_plane) / denom;
+    Ok((origin, dir))
+}
+
+/// Trace from `chain[0]` through the point `through`, repeating the chain's interactions at each
+/// hit, and end on the plane `(x_plane, n_plane)`: the new specular vertices and the end point.
+fn propagate(
+    scene: &Scene,
+    chain: &[ChainVertex],
+    through: DVec3,
+    x_plane: DVec3,
+    n_plane: DVec3,
+) -> Result<(Vec<ChainVertex>, DVec3), WalkFailure> {
+    let m = chain.len() - 2;
+    let dir = (through - chain[0].p()).normalize_or_zero();
+    if dir == DVec3::ZERO {
+        return Err(WalkFailure::ChangedConfiguration);
+    }
+    let mut out = Vec::with_capacity(m);
+    let expected = chain[1..=m]
+        .iter()
+        .map(|v| (Some(v.material), v.interaction, v.offset));
+    let (origin, dir) = follow(scene, &chain[0], dir, expected, &mut out)?;
+    let t = (x_plane - origin).dot(n_plane) / dir.dot(n_plane);
     if !(t > 0.0 && t.is_finite()) {
         return Err(WalkFailure::ChangedConfiguration);
     }
     Ok((out, origin + dir * t))
+}
+
+/// A chain traced from `start` along `dir` through specular vertices that scatter as
+/// `interactions` say (ideal specular, offsets 0) to the next surface: `start`, the specular
+/// vertices and the end (a reflecting vertex of the surface it lands on). For building chains in
+/// tests, benchmarks and the perturbation's deterministic propagation.
+pub fn trace_chain(
+    scene: &Scene,
+    start: &ChainVertex,
+    dir: DVec3,
+    interactions: &[Interaction],
+) -> Result<Vec<ChainVertex>, WalkFailure> {
+    let mut out = vec![*start];
+    let expected = interactions.iter().map(|&i| (None, i, [0.0; 2]));
+    let (origin, dir) = follow(scene, start, dir, expected, &mut out)?;
+    let hit = scene
+        .intersect(&Ray::new(origin, dir))
+        .ok_or(WalkFailure::ChangedConfiguration)?;
+    out.push(ChainVertex {
+        point: hit.point,
+        material: scene.primitive_material[hit.point.primitive as usize],
+        interaction: Interaction::Reflect,
+        offset: [0.0; 2],
+    });
+    Ok(out)
 }
 
 /// Walk the last vertex of `chain` (`x_0 … x_{m+1}`, `m ≥ 1` specular vertices between two fixed

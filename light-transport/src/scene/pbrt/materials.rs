@@ -205,8 +205,8 @@ pub(crate) fn material(
             return Err(params.error(
                 map,
                 format!(
-                    "{what}: bump, normal and displacement maps are not supported (shading \
-                     normals come from the meshes' vertex normals \"N\")"
+                    "{what}: \"{map}\" is not supported: bump, normal and displacement maps are \
+                     out of scope (shading normals come from the meshes' vertex normals \"N\")"
                 ),
             ));
         }
