@@ -161,7 +161,10 @@ impl Bvh {
         } else {
             f32::INFINITY
         };
-        BvhRay::new(to_f32(o), to_f32(d), 0.0, tmax)
+        // `+ 0.0` turns negative zeros into positive ones: obvhs's traversal misses flat nodes
+        // for directions with a −0.0 component (e.g. `−n` of an axis-aligned normal), which it
+        // hits with +0.0.
+        BvhRay::new(to_f32(o), to_f32(d + DVec3::ZERO), 0.0, tmax)
     }
 
     /// The closest hit of the ray `o + t d`, `t ∈ (0, t_max)`.
@@ -225,6 +228,37 @@ mod tests {
     use super::*;
     use crate::geometry::NO_SHADING;
     use mcmc_core::rng::{stream, uniform};
+
+    /// A flat quad is hit by rays along its normal whatever the sign of their zero components
+    /// (a direction of `(−0.0, −1, −0.0)` used to slip through).
+    #[test]
+    fn axis_aligned_rays_with_negative_zeros_hit_flat_geometry() {
+        let quad = |a: DVec3, b: DVec3, c: DVec3| {
+            Primitive::Triangle(Triangle {
+                p: [a, b, c],
+                uv: [[0.0; 2]; 3],
+                flip: false,
+                shading: NO_SHADING,
+            })
+        };
+        let (p0, p1, p2, p3) = (
+            DVec3::new(-2.0, 0.0, -2.0),
+            DVec3::new(-2.0, 0.0, 2.0),
+            DVec3::new(2.0, 0.0, 2.0),
+            DVec3::new(2.0, 0.0, -2.0),
+        );
+        let bvh = Bvh::new(vec![quad(p0, p1, p2), quad(p0, p2, p3)]);
+        let o = DVec3::new(0.3, 0.5, 0.7);
+        for d in [
+            DVec3::new(0.0, -1.0, 0.0),
+            DVec3::new(-0.0, -1.0, -0.0),
+            -DVec3::Y,
+        ] {
+            let hit = bvh.closest_hit(o, d, f64::INFINITY).expect("hits the quad");
+            assert!((hit.t - 0.5).abs() < 1e-12);
+            assert!(bvh.occluded(o, d, 1.0));
+        }
+    }
 
     /// The BVH finds exactly what brute force finds.
     #[test]

@@ -10,11 +10,13 @@
 //! * [`tridiagonal`] — the O(n) block-tridiagonal solve (2×2 blocks), with a dense fallback;
 //! * [`geometry_term`] — the tangent map `−A⁻¹B` and the generalised geometry term (eq. 9);
 //! * [`walk`] — the predictor–corrector walk of §4 and its statistics;
-//! * [`vmf`] — the von Mises–Fisher distribution of the manifold perturbation's directions.
+//! * [`vmf`] — the von Mises–Fisher distribution of the manifold perturbation's directions;
+//! * [`probe`] — synthetic walks on a scene, for measuring success, iterations, reversibility.
 
 pub mod chain;
 pub mod constraint;
 pub mod geometry_term;
+pub mod probe;
 pub mod tridiagonal;
 pub mod vmf;
 pub mod walk;
