@@ -105,19 +105,7 @@ impl BlockTridiagonal {
         if n == 0 || rhs.len() != n {
             return None;
         }
-        let mut a = DMatrix::<f64>::zeros(2 * n, 2 * n);
-        for i in 0..n {
-            a.fixed_view_mut::<2, 2>(2 * i, 2 * i)
-                .copy_from(&self.diagonal[i]);
-            if i > 0 {
-                a.fixed_view_mut::<2, 2>(2 * i, 2 * i - 2)
-                    .copy_from(&self.lower[i]);
-            }
-            if i + 1 < n {
-                a.fixed_view_mut::<2, 2>(2 * i, 2 * i + 2)
-                    .copy_from(&self.upper[i]);
-            }
-        }
+        let a = self.to_dense();
         let mut b = DMatrix::<f64>::zeros(2 * n, K);
         for (i, r) in rhs.iter().enumerate() {
             b.fixed_view_mut::<2, K>(2 * i, 0).copy_from(r);
