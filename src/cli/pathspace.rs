@@ -1,11 +1,14 @@
-//! Options of the path-space integrators (`--algo mlt|erpt`): mutation probabilities, the
-//! perturbations' offsets, and ERPT's chains.
+//! Options of the path-space integrators (`--algo mlt|erpt|memlt|mept`): mutation probabilities,
+//! the perturbations' offsets, the manifold perturbation's λ and walk, and ERPT's chains.
 
 use super::CliError;
 use super::metropolis::MetropolisArgs;
 use super::registry::Common;
 use clap::{Args, ValueEnum};
-use light_transport::pathspace::{MutationProbabilities, Mutations, PerturbationSettings};
+use light_transport::manifold::ManifoldSettings;
+use light_transport::pathspace::{
+    ManifoldPerturbationSettings, MutationProbabilities, Mutations, PerturbationSettings,
+};
 use mcmc_core::proposals::{MixtureRule, Selection};
 
 fn parse_probabilities(s: &str) -> Result<MutationProbabilities, String> {
@@ -69,6 +72,30 @@ pub struct PathSpaceArgs {
     /// Largest angular offset (radians).
     #[arg(long, default_value_t = 0.1)]
     pub theta2: f64,
+    /// Mutation probabilities of `memlt` (manifold exploration MLT).
+    #[arg(
+        long,
+        value_parser = parse_probabilities,
+        default_value = "bidirectional=0.3,manifold-light=0.3,manifold-eye=0.3,new-path=0.1"
+    )]
+    pub memlt_mutations: MutationProbabilities,
+    /// Mutation probabilities of `mept` (manifold exploration path tracing).
+    #[arg(
+        long,
+        value_parser = parse_probabilities,
+        default_value = "manifold-light=0.5,manifold-eye=0.5"
+    )]
+    pub mept_mutations: MutationProbabilities,
+    /// Manifold perturbation: its density at the current direction is λ² times the sampling
+    /// density there (larger: smaller steps; the paper uses 50–500).
+    #[arg(long, default_value_t = 50.0)]
+    pub lambda: f64,
+    /// Manifold walk: most iterations.
+    #[arg(long, default_value_t = 20)]
+    pub manifold_iterations: usize,
+    /// Manifold walk: convergence tolerance relative to the scene's diagonal.
+    #[arg(long, default_value_t = 1e-7)]
+    pub manifold_epsilon: f64,
     /// ERPT: mutations per chain.
     #[arg(long, default_value_t = 100)]
     pub erpt_chain_length: u64,
@@ -88,6 +115,17 @@ impl PathSpaceArgs {
         }
     }
 
+    /// The manifold perturbation's settings.
+    pub fn manifold(&self) -> ManifoldPerturbationSettings {
+        ManifoldPerturbationSettings {
+            lambda: self.lambda,
+            walk: ManifoldSettings {
+                max_iterations: self.manifold_iterations,
+                epsilon: self.manifold_epsilon,
+            },
+        }
+    }
+
     /// A mutation set with `probabilities` (validated).
     pub fn mutations(
         &self,
@@ -100,6 +138,7 @@ impl PathSpaceArgs {
             importance: m.importance(),
             probabilities: probabilities.clone(),
             perturbation: self.perturbation(),
+            manifold: self.manifold(),
             rule: match self.mixture_rule {
                 Rule::PerComponent => MixtureRule::PerComponent,
                 Rule::Combined => MixtureRule::Combined,

@@ -43,6 +43,8 @@ pub const ALGORITHMS: &[Entry] = &[
     algos::mmlt::ENTRY,
     algos::mlt::ENTRY,
     algos::erpt::ENTRY,
+    algos::memlt::ENTRY,
+    algos::mept::ENTRY,
     algos::cmlt::ENTRY,
 ];
 

@@ -13,7 +13,7 @@
 //! Files: [`path`] (the path and its strategies), [`state`] (chain state), [`walk`] (tracing and
 //! offsets), [`mutation`] (the interface), [`mutations`] (the registry and the mixture), one file
 //! per mutation ([`bidirectional`], [`lens_subpath`], [`lens`], [`caustic`], [`multi_chain`],
-//! [`new_path`]; [`perturbation`] holds what the perturbations share), [`mlt`] (the integrator on
+//! [`new_path`], [`manifold_perturbation`]; [`perturbation`] holds what the perturbations share), [`mlt`] (the integrator on
 //! the shared driver), [`erpt`] (energy redistribution).
 
 pub mod bidirectional;
@@ -21,6 +21,7 @@ pub mod caustic;
 pub mod erpt;
 pub mod lens;
 pub mod lens_subpath;
+pub mod manifold_perturbation;
 pub mod mlt;
 pub mod multi_chain;
 pub mod mutation;
@@ -33,6 +34,7 @@ pub mod walk;
 
 pub use bidirectional::{Bidirectional, Deletion};
 pub use erpt::{Erpt, ErptSettings};
+pub use manifold_perturbation::{ManifoldPerturbation, ManifoldPerturbationSettings, Toward};
 pub use mlt::PathMlt;
 pub use mutation::{Change, Mutation, MutationContext, MutationProposal, Registration};
 pub use mutations::{MutationProbabilities, MutationSettings, Mutations, REGISTRY};

@@ -10,6 +10,7 @@
 
 use super::mutation::{Mutation, MutationContext, MutationProposal, Registration};
 use super::new_path::NewPath;
+use super::manifold_perturbation::ManifoldPerturbationSettings;
 use super::perturbation::PerturbationSettings;
 use super::state::PathState;
 use crate::metropolis::ImportanceKind;
@@ -29,6 +30,8 @@ pub const REGISTRY: &[Registration] = &[
     super::caustic::REGISTRATION,
     super::multi_chain::REGISTRATION,
     super::new_path::REGISTRATION,
+    super::manifold_perturbation::TOWARD_LIGHT,
+    super::manifold_perturbation::TOWARD_EYE,
 ];
 
 /// The index of the registered mutation `name`.
@@ -81,6 +84,25 @@ impl MutationProbabilities {
     /// Only `name` and the new-path mutation, half each (the per-mutation convergence tests).
     pub fn with_new_path(name: &str) -> Result<Self> {
         Self::of(&[(name, 0.5), ("new-path", 0.5)])
+    }
+
+    /// The manifold perturbation only, half in each direction (manifold exploration path
+    /// tracing, MEPT).
+    pub fn manifold() -> Self {
+        Self::of(&[("manifold-light", 0.5), ("manifold-eye", 0.5)])
+            .unwrap_or_else(|_| Self::default())
+    }
+
+    /// Manifold exploration MLT (MEMLT): bidirectional 0.3, the manifold perturbation 0.6 (0.3
+    /// each direction), new path 0.1.
+    pub fn manifold_exploration() -> Self {
+        Self::of(&[
+            ("bidirectional", 0.3),
+            ("manifold-light", 0.3),
+            ("manifold-eye", 0.3),
+            ("new-path", 0.1),
+        ])
+        .unwrap_or_else(|_| Self::default())
     }
 
     /// The perturbations only (energy redistribution path tracing): lens 0.4, caustic 0.3,
@@ -164,6 +186,8 @@ pub struct MutationSettings {
     pub importance: ImportanceKind,
     /// Offsets of the perturbations.
     pub perturbation: PerturbationSettings,
+    /// The manifold perturbation's `λ` and walk.
+    pub manifold: ManifoldPerturbationSettings,
     /// Lengths of new paths.
     pub new_path: NewPath,
 }
@@ -179,6 +203,8 @@ pub struct Mutations {
     pub probabilities: MutationProbabilities,
     /// Offsets of the perturbations.
     pub perturbation: PerturbationSettings,
+    /// The manifold perturbation's `λ` and walk.
+    pub manifold: ManifoldPerturbationSettings,
     /// Per-component or combined transition densities.
     pub rule: MixtureRule,
     /// Fixed selection, or in proportion to suitability for the current path.
@@ -194,6 +220,7 @@ impl Mutations {
             importance: ImportanceKind::default(),
             probabilities: MutationProbabilities::default(),
             perturbation: PerturbationSettings::default(),
+            manifold: ManifoldPerturbationSettings::default(),
             rule: MixtureRule::PerComponent,
             selection: Selection::Suitability,
         }
@@ -203,6 +230,17 @@ impl Mutations {
     pub fn validate(&self) -> Result<()> {
         self.probabilities.validate()?;
         self.perturbation.validate()?;
+        self.manifold.validate()?;
+        let manifold = self.probabilities.probability(super::manifold_perturbation::TOWARD_LIGHT.name)
+            + self.probabilities.probability(super::manifold_perturbation::TOWARD_EYE.name);
+        if manifold > 0.0 && self.rule == MixtureRule::Combined {
+            return Err(Error::InvalidParameter {
+                name: "mixture rule".into(),
+                reason: "the manifold perturbation runs with the per-component rule only (its density \
+                         for pairs another mutation proposed would need the walk replayed)"
+                    .into(),
+            });
+        }
         if self.max_edges == 0 {
             return Err(Error::InvalidParameter {
                 name: "max depth".into(),
@@ -218,6 +256,7 @@ impl Mutations {
             max_edges: self.max_edges,
             importance: self.importance,
             perturbation: self.perturbation,
+            manifold: self.manifold,
             new_path,
         }
     }

@@ -4,6 +4,8 @@ pub mod bdpt;
 pub mod cmlt;
 pub mod erpt;
 pub mod lt;
+pub mod memlt;
+pub mod mept;
 pub mod mlt;
 pub mod mmlt;
 pub mod pssmlt;

@@ -1,0 +1,21 @@
+//! Manifold exploration MLT.
+
+use crate::cli::registry::Entry;
+use light_transport::pathspace::PathMlt;
+use light_transport::renderer::Metropolis;
+
+/// MEMLT (Jakob & Marschner 2012): path-space MLT with the manifold perturbation in place of the
+/// lens, caustic and multi-chain perturbations.
+pub const ENTRY: Entry = Entry {
+    name: "memlt",
+    about: "Manifold exploration MLT (Jakob & Marschner): bidirectional, manifold perturbation and new-path mutations",
+    unbiased: false,
+    build: |_, c, a| {
+        let p = &a.pathspace;
+        let mutations = p.mutations(c, &a.metropolis, &p.memlt_mutations)?;
+        Ok(Box::new(Metropolis {
+            method: PathMlt::new(mutations)?,
+            settings: a.metropolis.settings(),
+        }))
+    },
+};

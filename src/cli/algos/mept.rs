@@ -1,0 +1,24 @@
+//! Manifold exploration path tracing.
+
+use crate::cli::registry::Entry;
+use light_transport::pathspace::{Erpt, ErptSettings};
+use light_transport::renderer::Passes;
+
+/// MEPT (Jakob & Marschner 2012): energy redistribution path tracing with the manifold
+/// perturbation in place of its perturbations.
+pub const ENTRY: Entry = Entry {
+    name: "mept",
+    about: "Manifold exploration path tracing (Jakob & Marschner): ERPT chains of manifold perturbations",
+    unbiased: true,
+    build: |scene, c, a| {
+        let p = &a.pathspace;
+        let mut settings = ErptSettings::new(c.max_edges);
+        settings.mutations = p.mutations(c, &a.metropolis, &p.mept_mutations)?;
+        settings.chain_length = p.erpt_chain_length;
+        settings.chains_per_seed = p.erpt_chains;
+        Ok(Box::new(Passes {
+            estimator: Erpt::new(scene, settings)?,
+            details: Erpt::summary,
+        }))
+    },
+};
