@@ -70,15 +70,23 @@ fn each_manifold_direction_with_new_paths_converges_to_bdpt() {
         let scene = scene(name);
         let reference = bdpt_batches(&scene);
         for which in ["manifold-light", "manifold-eye"] {
-            let mlt = PathMlt::new(mutations(MutationProbabilities::with_new_path(which).unwrap()))
-                .unwrap();
+            let mlt = PathMlt::new(mutations(
+                MutationProbabilities::with_new_path(which).unwrap(),
+            ))
+            .unwrap();
             let (images, stats) =
                 blocks_and_stats(metropolis_runs(&scene, &mlt, settings(4000, 32.0, 93), 8));
             let p = min_p(&images, &reference);
             report(name, which, p, &stats);
             let i = light_transport::pathspace::mutations::index_of(which).unwrap();
-            assert!(stats.kinds[i].accepted > 0, "{name}: {which} never accepted");
-            assert!(p > ALPHA, "{name}: {which} disagrees with BDPT (p = {p:.2e})");
+            assert!(
+                stats.kinds[i].accepted > 0,
+                "{name}: {which} never accepted"
+            );
+            assert!(
+                p > ALPHA,
+                "{name}: {which} disagrees with BDPT (p = {p:.2e})"
+            );
         }
     }
 }
@@ -95,8 +103,13 @@ fn mept_converges_to_bdpt_on_every_builtin_scene() {
         let spp = if name.starts_with("pool") { 16.0 } else { 4.0 };
         let images: Vec<Vec<f64>> = (0..8)
             .map(|r| {
-                let (film, _) =
-                    render(&scene, &mept, Budget::SamplesPerPixel(spp), 900 + r, |_, _| true);
+                let (film, _) = render(
+                    &scene,
+                    &mept,
+                    Budget::SamplesPerPixel(spp),
+                    900 + r,
+                    |_, _| true,
+                );
                 assert_eq!(film.discarded, 0);
                 blocks(&Image::from_film(&film))
             })

@@ -83,6 +83,7 @@ fn mutations(probabilities: MutationProbabilities) -> Mutations {
         importance: ImportanceKind::Luminance,
         probabilities,
         perturbation: Default::default(),
+        manifold: Default::default(),
         rule: MixtureRule::PerComponent,
         selection: Selection::Fixed,
     }

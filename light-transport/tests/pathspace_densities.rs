@@ -76,6 +76,8 @@ enum MutationKind {
     Caustic,
     MultiChain,
     NewPath,
+    ManifoldLight,
+    ManifoldEye,
 }
 
 impl MutationKind {
@@ -87,6 +89,8 @@ impl MutationKind {
             MutationKind::Caustic => "caustic",
             MutationKind::MultiChain => "multi-chain",
             MutationKind::NewPath => "new-path",
+            MutationKind::ManifoldLight => "manifold-light",
+            MutationKind::ManifoldEye => "manifold-eye",
         }
     }
 }
@@ -303,6 +307,7 @@ fn mutations() -> Mutations {
         importance: IMPORTANCE,
         probabilities: MutationProbabilities::default(),
         perturbation: fx().settings,
+        manifold: Default::default(),
     }
 }
 
@@ -529,6 +534,45 @@ fn t_bidirectional(
         sum += light * camera_walk(f, to, cam_start, s);
     }
     p / splits as f64 * sum
+}
+
+/// `λ` of the manifold perturbation (the library's default).
+const LAMBDA: f64 = 50.0;
+
+/// Density of the von Mises–Fisher distribution about `mean` whose density at `mean` is `peak`,
+/// at `w`: `κ e^{κ(μ·w − 1)} / (2π (1 − e^{−2κ}))`, `κ` found here by bisection.
+fn vmf_pdf(peak: f64, mean: DVec3, w: DVec3) -> f64 {
+    let at_mean = |k: f64| k / (TAU * (1.0 - (-2.0 * k).exp()));
+    let (mut lo, mut hi) = (1e-9f64, 1e12f64);
+    for _ in 0..300 {
+        let mid = (lo * hi).sqrt();
+        if at_mean(mid) < peak {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let k = (lo * hi).sqrt();
+    k * (k * (mean.dot(w) - 1.0)).exp() / (TAU * (1.0 - (-2.0 * k).exp()))
+}
+
+/// Manifold perturbation (non-specular paths: `x_b` is the neighbour of `x_a` and joins `x_c`
+/// directly) moving vertex `b` of `from` to make `to`: `x_a` uniform among the `k − 1` vertices
+/// this direction can start from, the new direction from the von Mises–Fisher distribution whose
+/// density at the current direction is `λ² p(ω_i → ω_o)`, turned into area at `x'_b` by
+/// `G(x_a, x'_b) / |cos θ_a|`.
+fn t_manifold(f: &Fixture, from: &[Vertex], to: &[Vertex], b: usize, toward_light: bool) -> f64 {
+    let k = from.len() - 1;
+    let a = if toward_light { b + 1 } else { b - 1 };
+    let behind = if toward_light {
+        (a < k).then_some(a + 1)
+    } else {
+        a.checked_sub(1)
+    };
+    let p = solid_pdf(f, from, a, behind, b);
+    let (w_from, w_to) = (dir(&from[a], &from[b]), dir(&to[a], &to[b]));
+    let d = vmf_pdf(LAMBDA * LAMBDA * p, w_from, w_to);
+    d / cos_at(f, &to[a], w_to) * geometry(f, &to[a], &to[b]) / (k - 1) as f64
 }
 
 /// New-path mutation: `P_len(k)/(k+1) · Σ_s p_s`.
@@ -806,6 +850,16 @@ fn densities(
             )
         }
         MutationKind::NewPath => (t_new_path(f, np, y), t_new_path(f, np, x)),
+        MutationKind::ManifoldLight | MutationKind::ManifoldEye => {
+            assert_eq!(y.len(), x.len());
+            let moved: Vec<usize> = (0..=k).filter(|&i| !same_point(&x[i], &y[i])).collect();
+            assert_eq!(moved.len(), 1, "{kind:?} moved {moved:?}");
+            let light = kind == MutationKind::ManifoldLight;
+            (
+                t_manifold(f, x, y, moved[0], light),
+                t_manifold(f, y, x, moved[0], light),
+            )
+        }
     }
 }
 
@@ -989,6 +1043,16 @@ fn pointwise_multi_chain() {
 #[test]
 fn pointwise_new_path() {
     check_pointwise(MutationKind::NewPath, 106, 0.1, &ALL_K[1..]);
+}
+
+#[test]
+fn pointwise_manifold_toward_the_light() {
+    check_pointwise(MutationKind::ManifoldLight, 107, 0.5, &K_FROM_2);
+}
+
+#[test]
+fn pointwise_manifold_toward_the_eye() {
+    check_pointwise(MutationKind::ManifoldEye, 108, 0.5, &K_FROM_2);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1480,6 +1544,41 @@ fn new_path_estimate() -> &'static Estimate {
     })
 }
 
+/// Manifold perturbation of the fixed `k = 2` path, from the lens (toward the light) or from the
+/// light (toward the eye): `v_1` moves into a small floor patch beside it (the perturbation is
+/// concentrated: at λ = 50 its directions spread by about 0.01 rad).
+fn manifold_estimate(kind: MutationKind, seed: u64) -> Estimate {
+    let f = fx();
+    let x = fixed_k2();
+    let xv = x.path.vertices.clone();
+    let patch = Patch::floor(
+        [P1_K2.x + 0.004, P1_K2.x + 0.03],
+        [P1_K2.z - 0.015, P1_K2.z + 0.01],
+    );
+    let np = new_path_lengths();
+    let mut y = PathState::default();
+    let light = kind == MutationKind::ManifoldLight;
+    estimate(kind.name(), patch.area(), 200_000, seed, |rng| {
+        y.path.vertices.clear();
+        propose(kind, &np, &x, rng, &mut y).ok()?;
+        let yv = &y.path.vertices;
+        (yv.len() == 3 && patch.contains(&yv[1])).then(|| {
+            let t = t_manifold(f, &xv, yv, 1, light);
+            (1.0 / t, 1.0 / (BROKEN_SCALE * t))
+        })
+    })
+}
+
+fn manifold_light_estimate() -> &'static Estimate {
+    static E: OnceLock<Estimate> = OnceLock::new();
+    E.get_or_init(|| manifold_estimate(MutationKind::ManifoldLight, 209))
+}
+
+fn manifold_eye_estimate() -> &'static Estimate {
+    static E: OnceLock<Estimate> = OnceLock::new();
+    E.get_or_init(|| manifold_estimate(MutationKind::ManifoldEye, 210))
+}
+
 fn assert_accepted(name: &str, e: &Estimate) {
     assert!(e.hits >= 1000, "{name}: only {} hits", e.hits);
     assert!(
@@ -1539,6 +1638,18 @@ fn numerical_bidirectional_insert_before_lens() {
 }
 
 #[test]
+fn numerical_manifold_perturbation() {
+    assert_accepted(
+        "manifold perturbation from the lens",
+        manifold_light_estimate(),
+    );
+    assert_accepted(
+        "manifold perturbation from the light",
+        manifold_eye_estimate(),
+    );
+}
+
+#[test]
 fn numerical_new_path() {
     assert_accepted("new path", new_path_estimate());
 }
@@ -1558,4 +1669,6 @@ fn numerical_checks_reject_wrong_densities() {
         bidirectional_lens_estimate(),
     );
     assert_rejected("new path, one strategy", new_path_estimate());
+    assert_rejected("manifold from the lens × 1.15", manifold_light_estimate());
+    assert_rejected("manifold from the light × 1.15", manifold_eye_estimate());
 }

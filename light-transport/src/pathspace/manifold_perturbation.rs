@@ -199,7 +199,9 @@ impl<'a> ManifoldPerturbation<'a> {
         let v = &path.vertices[a];
         match v.kind {
             VertexKind::Camera => self.scene.camera.importance(v.p(), w).1,
-            VertexKind::Light { light } => self.scene.lights[light as usize].pdf_direction(v.n(), w),
+            VertexKind::Light { light } => {
+                self.scene.lights[light as usize].pdf_direction(v.n(), w)
+            }
             VertexKind::Surface => {
                 let behind = match self.toward {
                     Toward::Light => a + 1,
@@ -270,7 +272,11 @@ impl<'a> ManifoldPerturbation<'a> {
     }
 
     /// Record a walk.
-    fn record(&self, m: usize, result: &Result<crate::manifold::Walked, crate::manifold::WalkFailure>) {
+    fn record(
+        &self,
+        m: usize,
+        result: &Result<crate::manifold::Walked, crate::manifold::WalkFailure>,
+    ) {
         if let Ok(mut s) = self.stats.lock() {
             s.walks.record(m, result);
         }
@@ -374,7 +380,13 @@ fn chain_vertex(scene: &Scene, path: &super::FullPath, i: usize) -> Option<Chain
 /// The generalised geometry term of `path` between the non-specular vertices `from` and `to`
 /// (specular in between), seen from the end `side` (one of the two): the projected solid angle
 /// at `side` per unit area at the other end. 0 when the chain is singular.
-fn chain_geometry(scene: &Scene, path: &super::FullPath, from: usize, to: usize, side: usize) -> f64 {
+fn chain_geometry(
+    scene: &Scene,
+    path: &super::FullPath,
+    from: usize,
+    to: usize,
+    side: usize,
+) -> f64 {
     let (lo, hi) = (from.min(to), from.max(to));
     let Some(chain) = (lo..=hi)
         .map(|i| chain_vertex(scene, path, i))
@@ -405,9 +417,10 @@ fn vertex_factor(scene: &Scene, path: &super::FullPath, i: usize) -> Rgb {
     let mode = TransportMode::Radiance;
     let shading = v[i].shading_factor(scene, to_eye, to_light, mode);
     if path.specular(i) {
-        b.eval_delta(to_eye, to_light, mode).map_or(Rgb::BLACK, |d| {
-            d.f * (shading * to_light.dot(v[i].n()).abs())
-        })
+        b.eval_delta(to_eye, to_light, mode)
+            .map_or(Rgb::BLACK, |d| {
+                d.f * (shading * to_light.dot(v[i].n()).abs())
+            })
     } else {
         b.eval(to_eye, to_light, mode) * shading
     }
@@ -458,8 +471,7 @@ pub fn contribution(scene: &Scene, path: &super::FullPath, s: &Strategy) -> Opti
 /// Whether two sets of positions agree to `tolerance`.
 fn same_positions(a: &[ChainVertex], b: &[ChainVertex], tolerance: f64) -> bool {
     a.len() == b.len()
-        && a
-            .iter()
+        && a.iter()
             .zip(b)
             .all(|(u, v)| (u.p() - v.p()).length() <= tolerance)
 }
@@ -530,10 +542,19 @@ impl Mutation for ManifoldPerturbation<'_> {
             self.record(second.len(), &result);
             let forward = result.map_err(|_| Failure::Failed)?;
             // The reverse walk must bring the chain back to x̄'s.
-            let back = walk_manifold(scene, &forward.chain, &chain[chain.len() - 1], &self.settings.walk);
+            let back = walk_manifold(
+                scene,
+                &forward.chain,
+                &chain[chain.len() - 1],
+                &self.settings.walk,
+            );
             let scale = (scene.bounds.1 - scene.bounds.0).length();
             let returned = back.is_ok_and(|b| {
-                same_positions(&b.chain[1..b.chain.len() - 1], &chain[1..chain.len() - 1], 1e-6 * scale)
+                same_positions(
+                    &b.chain[1..b.chain.len() - 1],
+                    &chain[1..chain.len() - 1],
+                    1e-6 * scale,
+                )
             });
             if !returned {
                 self.record_non_reversible();

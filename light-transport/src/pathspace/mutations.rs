@@ -8,9 +8,9 @@
 //! fails, count as rejected proposals (the current path is recorded with weight 1) and are
 //! counted.
 
+use super::manifold_perturbation::ManifoldPerturbationSettings;
 use super::mutation::{Mutation, MutationContext, MutationProposal, Registration};
 use super::new_path::NewPath;
-use super::manifold_perturbation::ManifoldPerturbationSettings;
 use super::perturbation::PerturbationSettings;
 use super::state::PathState;
 use crate::metropolis::ImportanceKind;
@@ -231,14 +231,19 @@ impl Mutations {
         self.probabilities.validate()?;
         self.perturbation.validate()?;
         self.manifold.validate()?;
-        let manifold = self.probabilities.probability(super::manifold_perturbation::TOWARD_LIGHT.name)
-            + self.probabilities.probability(super::manifold_perturbation::TOWARD_EYE.name);
+        let manifold = self
+            .probabilities
+            .probability(super::manifold_perturbation::TOWARD_LIGHT.name)
+            + self
+                .probabilities
+                .probability(super::manifold_perturbation::TOWARD_EYE.name);
         if manifold > 0.0 && self.rule == MixtureRule::Combined {
             return Err(Error::InvalidParameter {
                 name: "mixture rule".into(),
-                reason: "the manifold perturbation runs with the per-component rule only (its density \
+                reason:
+                    "the manifold perturbation runs with the per-component rule only (its density \
                          for pairs another mutation proposed would need the walk replayed)"
-                    .into(),
+                        .into(),
             });
         }
         if self.max_edges == 0 {
