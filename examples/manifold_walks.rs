@@ -32,7 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             continue;
         }
         let t = Instant::now();
-        let (stats, non_reversible) = probe(scene, &cases, &settings);
+        let stats = probe(scene, &cases, &settings);
         let secs = t.elapsed().as_secs_f64();
         println!(
             "| {name} | {} | {:.1}% | {:.2} | {:.2} / {} | {:.2}% | {:.0} k | {} |",
@@ -41,7 +41,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             stats.mean_iterations(),
             stats.vertices as f64 / stats.walks as f64,
             stats.max_vertices,
-            100.0 * non_reversible as f64 / stats.converged.max(1) as f64,
+            100.0 * stats.non_reversible as f64 / stats.converged.max(1) as f64,
             // Each converged walk is walked back too: count both.
             (stats.walks + stats.converged) as f64 / secs / 1e3,
             failures(&stats)

@@ -171,6 +171,8 @@ impl<M: Method> Renderer for Metropolis<M> {
                 (control.progress)(film, &progress)
             },
         )?;
+        let mut details = stats.summary(pixels);
+        details.extend(self.method.details());
         let report = Report {
             samples_per_pixel: stats.mutations as f64 / pixels,
             samples: stats.mutations,
@@ -178,7 +180,7 @@ impl<M: Method> Renderer for Metropolis<M> {
             elapsed: stats.bootstrap_time + stats.seed_time + stats.chain_time,
             discarded: film.discarded,
             interrupted: stats.interrupted,
-            details: stats.summary(pixels),
+            details,
             metropolis: Some(stats),
         };
         Ok((film, report))

@@ -30,7 +30,7 @@ pub use tridiagonal::BlockTridiagonal;
 pub use vmf::VonMisesFisher;
 pub use walk::{
     ManifoldSettings, NO_MATERIAL, WalkFailure, WalkStats, Walked, endpoint_plane, trace_chain,
-    walk_manifold,
+    walk_manifold, walk_reversibly,
 };
 
 /// 2×2 blocks of the constraint Jacobian.

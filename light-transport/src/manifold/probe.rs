@@ -4,7 +4,7 @@
 //! surface by a small Gaussian offset, then walked back to test reversibility.
 
 use super::chain::{ChainVertex, Interaction, scatter};
-use super::walk::{ManifoldSettings, WalkFailure, WalkStats, walk_manifold};
+use super::walk::{ManifoldSettings, WalkFailure, WalkStats, walk_reversibly};
 use crate::geometry::{Ray, offset_origin};
 use crate::light::LightKind;
 use crate::scene::Scene;
@@ -130,32 +130,14 @@ pub fn probe_cases(
     out
 }
 
-/// Statistics of walking every case to its target and, when that succeeds, back: the walk
-/// statistics of the forward walks, and how many converged walks did not return to their start
-/// (the reverse walk failed or found another configuration; positions compared to 1e-6 of the
-/// scene's diagonal).
-pub fn probe(scene: &Scene, cases: &[ProbeCase], settings: &ManifoldSettings) -> (WalkStats, u64) {
-    let scale = (scene.bounds.1 - scene.bounds.0).length();
+/// Statistics of walking every case to its target and, when that succeeds, back
+/// ([`walk_reversibly`]: `non_reversible` counts converged walks that did not return).
+pub fn probe(scene: &Scene, cases: &[ProbeCase], settings: &ManifoldSettings) -> WalkStats {
     let mut stats = WalkStats::default();
-    let mut non_reversible = 0;
     for case in cases {
-        let m = case.chain.len() - 2;
-        let forward = walk_manifold(scene, &case.chain, &case.target, settings);
-        stats.record(m, &forward);
-        if let Ok(w) = &forward {
-            let back = walk_manifold(scene, &w.chain, &case.chain[m + 1], settings);
-            let returned = back.as_ref().is_ok_and(|b| {
-                b.chain
-                    .iter()
-                    .zip(&case.chain)
-                    .all(|(a, o)| (a.p() - o.p()).length() <= 1e-6 * scale)
-            });
-            if !returned {
-                non_reversible += 1;
-            }
-        }
+        walk_reversibly(scene, &case.chain, &case.target, settings, &mut stats);
     }
-    (stats, non_reversible)
+    stats
 }
 
 /// The failure counts of `stats` as `cause n, …`.

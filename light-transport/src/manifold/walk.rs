@@ -107,6 +107,9 @@ pub struct WalkStats {
     pub max_vertices: u64,
     /// Failures by cause, in the order of [`WalkFailure::ALL`].
     pub failures: [u64; 5],
+    /// Converged walks whose reverse walk failed or found another configuration
+    /// ([`walk_reversibly`]).
+    pub non_reversible: u64,
 }
 
 impl WalkStats {
@@ -134,6 +137,33 @@ impl WalkStats {
         for (a, b) in self.failures.iter_mut().zip(o.failures) {
             *a += b;
         }
+        self.non_reversible += o.non_reversible;
+    }
+
+    /// One line: walks, success, iterations, failures by cause, non-reversible share.
+    pub fn summary(&self) -> String {
+        let share = |n: u64| 100.0 * n as f64 / self.walks.max(1) as f64;
+        let causes: Vec<String> = WalkFailure::ALL
+            .iter()
+            .zip(self.failures)
+            .filter(|(_, n)| *n > 0)
+            .map(|(f, n)| format!("{} {:.2}%", f.name(), share(n)))
+            .collect();
+        format!(
+            "{} walks over {:.2} specular vertices (at most {}), {:.2}% converged in {:.2} iterations; \
+             failed: {}; non-reversible {:.2}%",
+            self.walks,
+            self.vertices as f64 / self.walks.max(1) as f64,
+            self.max_vertices,
+            100.0 * self.success_rate(),
+            self.mean_iterations(),
+            if causes.is_empty() {
+                "none".to_string()
+            } else {
+                causes.join(", ")
+            },
+            share(self.non_reversible)
+        )
     }
 
     /// Share of walks that converged.
@@ -254,6 +284,37 @@ pub fn trace_chain(
         offset: [0.0; 2],
     });
     Ok(out)
+}
+
+/// Walk the end of `chain` to `target` and back (Jakob & Marschner 2012, §5.1: a walk can succeed
+/// one way and fail the other, or converge to another solution across a bifurcation): the forward
+/// walk when the reverse one returns every vertex to within 1e-6 of the scene's diagonal, `None`
+/// otherwise. Both outcomes are recorded in `stats`.
+pub fn walk_reversibly(
+    scene: &Scene,
+    chain: &[ChainVertex],
+    target: &ChainVertex,
+    settings: &ManifoldSettings,
+    stats: &mut WalkStats,
+) -> Option<Walked> {
+    let m = chain.len() - 2;
+    let forward = walk_manifold(scene, chain, target, settings);
+    stats.record(m, &forward);
+    let forward = forward.ok()?;
+    let scale = (scene.bounds.1 - scene.bounds.0).length();
+    let back = walk_manifold(scene, &forward.chain, &chain[m + 1], settings);
+    let returned = back.is_ok_and(|b| {
+        b.chain
+            .iter()
+            .zip(chain)
+            .all(|(a, o)| (a.p() - o.p()).length() <= 1e-6 * scale)
+    });
+    if returned {
+        Some(forward)
+    } else {
+        stats.non_reversible += 1;
+        None
+    }
 }
 
 /// Walk the last vertex of `chain` (`x_0 … x_{m+1}`, `m ≥ 1` specular vertices between two fixed

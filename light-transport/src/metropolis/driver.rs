@@ -57,6 +57,11 @@ pub trait Method: Sync {
     }
     /// Names of the move kinds (for statistics).
     fn kinds(&self) -> Vec<String>;
+    /// Lines the method adds to the render's summary (e.g. statistics of its moves beyond
+    /// acceptance); none by default.
+    fn details(&self) -> Vec<String> {
+        Vec::new()
+    }
     /// Told the per-group normalisations `b_g` once the bootstrap is done, before any chain runs
     /// (e.g. to choose path lengths in proportion to their energy).
     fn bootstrap_done(&self, _group_normalisation: &[f64]) {}

@@ -63,6 +63,7 @@ pub struct Erpt {
     /// The energy quantum `e_d`.
     pub quantum: f64,
     stats: Mutex<(Stats, u64)>,
+    walks: Mutex<crate::manifold::WalkStats>,
 }
 
 const PILOT_STREAM: u64 = 0xE4F7;
@@ -105,6 +106,7 @@ impl Erpt {
             quantum: mean / settings.chains_per_seed,
             settings,
             stats: Mutex::new((Stats::default(), 0)),
+            walks: Mutex::new(Default::default()),
         })
     }
 
@@ -126,7 +128,16 @@ impl Erpt {
                 .lines()
                 .map(str::to_string),
         );
+        let walks = self.walk_stats();
+        if walks.walks > 0 {
+            out.push(format!("walks      {}", walks.summary()));
+        }
         out
+    }
+
+    /// The manifold walks of the chains so far (the manifold perturbation's).
+    pub fn walk_stats(&self) -> crate::manifold::WalkStats {
+        self.walks.lock().map_or_else(|e| *e.into_inner(), |g| *g)
     }
 
     /// Acceptance per mutation kind and the number of chains run so far.
@@ -196,7 +207,9 @@ impl Estimator for Erpt {
             return Rgb::BLACK;
         }
         // Validated in `new`: building the mixture cannot fail.
-        let Ok(proposal) = m.proposal(scene, NewPath::uniform(m.max_edges)) else {
+        let Ok(proposal) =
+            m.proposal_recording(scene, NewPath::uniform(m.max_edges), Some(&self.walks))
+        else {
             return Rgb::BLACK;
         };
         let mut stats = Stats::default();

@@ -48,7 +48,7 @@ use crate::bsdf::TransportMode;
 use crate::light::LightKind;
 use crate::manifold::{
     ChainVertex, Interaction, ManifoldSettings, NO_MATERIAL, VonMisesFisher, WalkStats,
-    generalized_geometry, generalized_geometry_reverse, walk_manifold,
+    generalized_geometry, generalized_geometry_reverse, walk_reversibly,
 };
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
@@ -158,16 +158,19 @@ pub struct ManifoldPerturbation<'a> {
     toward: Toward,
     settings: ManifoldPerturbationSettings,
     importance: ImportanceKind,
-    stats: Mutex<ManifoldStats>,
+    /// Walks of this mutation object (merged into `sink` when it is dropped).
+    stats: Mutex<WalkStats>,
+    sink: Option<&'a Mutex<WalkStats>>,
 }
 
-/// What the perturbation's walks did.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ManifoldStats {
-    /// Forward walks (the second chain moved to `x'_b`).
-    pub walks: WalkStats,
-    /// Converged forward walks whose reverse walk failed or found another configuration.
-    pub non_reversible: u64,
+impl Drop for ManifoldPerturbation<'_> {
+    fn drop(&mut self) {
+        if let (Some(sink), Ok(mine)) = (self.sink, self.stats.lock())
+            && let Ok(mut total) = sink.lock()
+        {
+            total.merge(&mine);
+        }
+    }
 }
 
 impl<'a> ManifoldPerturbation<'a> {
@@ -178,12 +181,13 @@ impl<'a> ManifoldPerturbation<'a> {
             toward,
             settings: c.settings.manifold,
             importance: c.settings.importance,
-            stats: Mutex::new(ManifoldStats::default()),
+            stats: Mutex::new(WalkStats::default()),
+            sink: c.walks,
         }
     }
 
-    /// The walk statistics so far.
-    pub fn stats(&self) -> ManifoldStats {
+    /// The walk statistics of this object so far.
+    pub fn stats(&self) -> WalkStats {
         self.stats.lock().map(|s| *s).unwrap_or_default()
     }
 
@@ -269,23 +273,6 @@ impl<'a> ManifoldPerturbation<'a> {
         }
         let ln = density.ln() - cos_a.ln() + g_a.ln() - i.ln() - (count as f64).ln();
         if ln.is_nan() { never } else { ln }
-    }
-
-    /// Record a walk.
-    fn record(
-        &self,
-        m: usize,
-        result: &Result<crate::manifold::Walked, crate::manifold::WalkFailure>,
-    ) {
-        if let Ok(mut s) = self.stats.lock() {
-            s.walks.record(m, result);
-        }
-    }
-
-    fn record_non_reversible(&self) {
-        if let Ok(mut s) = self.stats.lock() {
-            s.non_reversible += 1;
-        }
     }
 }
 
@@ -468,14 +455,6 @@ pub fn contribution(scene: &Scene, path: &super::FullPath, s: &Strategy) -> Opti
     (f.is_finite() && !f.is_black()).then_some(f)
 }
 
-/// Whether two sets of positions agree to `tolerance`.
-fn same_positions(a: &[ChainVertex], b: &[ChainVertex], tolerance: f64) -> bool {
-    a.len() == b.len()
-        && a.iter()
-            .zip(b)
-            .all(|(u, v)| (u.p() - v.p()).length() <= tolerance)
-}
-
 impl Mutation for ManifoldPerturbation<'_> {
     fn name(&self) -> &'static str {
         match self.toward {
@@ -538,28 +517,13 @@ impl Mutation for ManifoldPerturbation<'_> {
                 interaction: Interaction::Reflect,
                 offset: [0.0; 2],
             };
-            let result = walk_manifold(scene, &chain, &target, &self.settings.walk);
-            self.record(second.len(), &result);
-            let forward = result.map_err(|_| Failure::Failed)?;
-            // The reverse walk must bring the chain back to x̄'s.
-            let back = walk_manifold(
-                scene,
-                &forward.chain,
-                &chain[chain.len() - 1],
-                &self.settings.walk,
-            );
-            let scale = (scene.bounds.1 - scene.bounds.0).length();
-            let returned = back.is_ok_and(|b| {
-                same_positions(
-                    &b.chain[1..b.chain.len() - 1],
-                    &chain[1..chain.len() - 1],
-                    1e-6 * scale,
-                )
-            });
-            if !returned {
-                self.record_non_reversible();
-                return Err(Failure::Failed);
+            let mut stats = WalkStats::default();
+            let walked_chain =
+                walk_reversibly(scene, &chain, &target, &self.settings.walk, &mut stats);
+            if let Ok(mut s) = self.stats.lock() {
+                s.merge(&stats);
             }
+            let forward = walked_chain.ok_or(Failure::Failed)?;
             let m = forward.chain.len();
             for cv in &forward.chain[1..m - 1] {
                 walked.push(Vertex {

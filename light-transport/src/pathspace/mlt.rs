@@ -11,12 +11,13 @@ use super::mutations::Mutations;
 use super::new_path::NewPath;
 use super::state::PathState;
 use crate::Result;
+use crate::manifold::WalkStats;
 use crate::metropolis::Method;
 use crate::sampler::IndependentStream;
 use crate::scene::Scene;
 use mcmc_core::kernel::Observer;
 use mcmc_core::{Chain, ChainRng};
-use std::sync::RwLock;
+use std::sync::{Mutex, RwLock};
 
 /// Path-space MLT.
 #[derive(Debug)]
@@ -24,6 +25,7 @@ pub struct PathMlt {
     /// The mutations.
     pub mutations: Mutations,
     new_path: RwLock<NewPath>,
+    walks: Mutex<WalkStats>,
 }
 
 impl PathMlt {
@@ -32,8 +34,14 @@ impl PathMlt {
         mutations.validate()?;
         Ok(Self {
             new_path: RwLock::new(NewPath::uniform(mutations.max_edges)),
+            walks: Mutex::new(WalkStats::default()),
             mutations,
         })
+    }
+
+    /// The manifold walks of the chains so far (the manifold perturbation's).
+    pub fn walk_stats(&self) -> WalkStats {
+        self.walks.lock().map_or_else(|e| *e.into_inner(), |g| *g)
     }
 
     /// The current new-path length distribution.
@@ -83,7 +91,10 @@ impl Method for PathMlt {
         observer: &mut O,
     ) {
         // Validated in `new`: building the mixture cannot fail.
-        if let Ok(proposal) = self.mutations.proposal(scene, self.new_path()) {
+        if let Ok(proposal) =
+            self.mutations
+                .proposal_recording(scene, self.new_path(), Some(&self.walks))
+        {
             Mutations::run(&proposal, chain, n, rng, observer);
         }
     }
@@ -97,7 +108,10 @@ impl Method for PathMlt {
         observer: &mut O,
     ) {
         // One mixture for the whole group (validated in `new`: building it cannot fail).
-        if let Ok(proposal) = self.mutations.proposal(scene, self.new_path()) {
+        if let Ok(proposal) =
+            self.mutations
+                .proposal_recording(scene, self.new_path(), Some(&self.walks))
+        {
             for (chain, rng) in chains.iter_mut().zip(rngs.iter_mut()) {
                 Mutations::run(&proposal, chain, n, rng, observer);
             }
@@ -106,5 +120,13 @@ impl Method for PathMlt {
 
     fn kinds(&self) -> Vec<String> {
         Mutations::kinds()
+    }
+
+    fn details(&self) -> Vec<String> {
+        let w = self.walk_stats();
+        if w.walks == 0 {
+            return Vec::new();
+        }
+        vec![format!("walks      {}", w.summary())]
     }
 }

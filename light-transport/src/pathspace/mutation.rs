@@ -120,6 +120,8 @@ pub struct MutationContext<'a, 's> {
     pub scene: &'a Scene,
     /// Settings of every mutation (path length limit, importance, offsets, new-path lengths).
     pub settings: &'s MutationSettings,
+    /// Where mutations that walk specular manifolds add their walk statistics (`None`: nowhere).
+    pub walks: Option<&'a std::sync::Mutex<crate::manifold::WalkStats>>,
 }
 
 /// A registered mutation: its name, its default selection weight in path-space MLT, and its

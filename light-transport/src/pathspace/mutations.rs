@@ -273,7 +273,11 @@ impl Mutations {
         name: &str,
     ) -> Option<Box<dyn Mutation + 'a>> {
         let r = REGISTRY.iter().find(|r| r.name == name)?;
-        Some((r.build)(&MutationContext { scene, settings }))
+        Some((r.build)(&MutationContext {
+            scene,
+            settings,
+            walks: None,
+        }))
     }
 
     /// The mixture of the mutations with positive weight, as an `mcmc_core` proposal whose kinds
@@ -283,10 +287,22 @@ impl Mutations {
         scene: &'a Scene,
         new_path: NewPath,
     ) -> Result<Mixture<'a, PathState>> {
+        self.proposal_recording(scene, new_path, None)
+    }
+
+    /// [`Mutations::proposal`] whose manifold walks are added to `walks` (when the mixture is
+    /// dropped).
+    pub fn proposal_recording<'a>(
+        &self,
+        scene: &'a Scene,
+        new_path: NewPath,
+        walks: Option<&'a std::sync::Mutex<crate::manifold::WalkStats>>,
+    ) -> Result<Mixture<'a, PathState>> {
         let settings = self.settings(new_path);
         let context = MutationContext {
             scene,
             settings: &settings,
+            walks,
         };
         const _: () = assert!(REGISTRY.len() <= super::state::CACHED_MUTATIONS);
         let components = REGISTRY

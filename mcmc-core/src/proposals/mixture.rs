@@ -293,8 +293,14 @@ impl<S> Proposal<S> for Mixture<'_, S> {
     fn propose(&self, x: &S, y: &mut S, rng: &mut ChainRng) -> Proposed {
         let suited = self.suited(x);
         let Some(k) = self.choose(suited.as_deref(), uniform(rng)) else {
-            // No component suits x (possible only with suitability selection).
-            return Proposed::failed(0, Failure::NotApplicable);
+            // No component suits x (possible only with suitability selection): counted against
+            // the first component that has weight, so statistics name a move that was wanted.
+            let first = self
+                .ln_weights
+                .iter()
+                .position(|w| *w > f64::NEG_INFINITY)
+                .unwrap_or(0);
+            return Proposed::failed(self.kind_offsets[first], Failure::NotApplicable);
         };
         let p = self.components[k].propose(x, y, rng);
         self.report(k, x, y, p, suited.as_deref())
