@@ -123,6 +123,7 @@ impl PathSpaceArgs {
                 max_iterations: self.manifold_iterations,
                 epsilon: self.manifold_epsilon,
             },
+            defect: None,
         }
     }
 

@@ -67,6 +67,18 @@ pub struct ManifoldPerturbationSettings {
     pub lambda: f64,
     /// The manifold walk.
     pub walk: ManifoldSettings,
+    /// A deliberate error, for showing that the tests see one (`None` outside those tests).
+    #[doc(hidden)]
+    pub defect: Option<ManifoldDefect>,
+}
+
+/// Deliberate errors of the manifold perturbation (tests of the tests).
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ManifoldDefect {
+    /// `T` without the generalised geometry term of the first chain: the density of `x'_b` taken
+    /// as the density of the direction.
+    FirstChainGeometry,
 }
 
 impl Default for ManifoldPerturbationSettings {
@@ -74,6 +86,7 @@ impl Default for ManifoldPerturbationSettings {
         Self {
             lambda: 50.0,
             walk: ManifoldSettings::default(),
+            defect: None,
         }
     }
 }
@@ -265,7 +278,10 @@ impl<'a> ManifoldPerturbation<'a> {
         let w = direction(&yv[s.a], &yv[self.step(s.a)]);
         let density = d.pdf(w);
         let cos_a = endpoint_cos(self.scene, &yv[s.a], w);
-        let g_a = chain_geometry(self.scene, yp, s.a, s.b, s.a);
+        let g_a = match self.settings.defect {
+            Some(ManifoldDefect::FirstChainGeometry) => 1.0,
+            None => chain_geometry(self.scene, yp, s.a, s.b, s.a),
+        };
         let f = contribution(self.scene, yp, s);
         let i = f.map_or(0.0, |f| self.importance.of(f));
         if !(density > 0.0 && cos_a > 0.0 && g_a > 0.0 && i > 0.0) {

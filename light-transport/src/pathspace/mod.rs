@@ -34,7 +34,9 @@ pub mod walk;
 
 pub use bidirectional::{Bidirectional, Deletion};
 pub use erpt::{Erpt, ErptSettings};
-pub use manifold_perturbation::{ManifoldPerturbation, ManifoldPerturbationSettings, Toward};
+pub use manifold_perturbation::{
+    ManifoldDefect, ManifoldPerturbation, ManifoldPerturbationSettings, Toward,
+};
 pub use mlt::PathMlt;
 pub use mutation::{Change, Mutation, MutationContext, MutationProposal, Registration};
 pub use mutations::{MutationProbabilities, MutationSettings, Mutations, REGISTRY};
