@@ -8,7 +8,7 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use light_transport::manifold::ManifoldSettings;
-use light_transport::manifold::probe::{failures, probe, probe_cases};
+use light_transport::manifold::probe::{probe, probe_cases};
 use light_transport::manifold::walk_manifold;
 use light_transport::scene::{Scene, builtin};
 use std::hint::black_box;
@@ -17,14 +17,7 @@ fn manifold_benches(c: &mut Criterion) {
     let scene = Scene::new(&builtin::builtin("pool").unwrap(), None).unwrap();
     let cases = probe_cases(&scene, 2000, 4, 0.002, 5);
     let settings = ManifoldSettings::default();
-    let (stats, non_reversible) = probe(&scene, &cases, &settings);
-    println!(
-        "pool, {} walks: {:.1}% converged, {:.2} iterations on average, {non_reversible} not reversible; failures: {}",
-        stats.walks,
-        100.0 * stats.success_rate(),
-        stats.mean_iterations(),
-        failures(&stats)
-    );
+    println!("pool: {}", probe(&scene, &cases, &settings).summary());
     let mut g = c.benchmark_group("manifold");
     g.throughput(Throughput::Elements(cases.len() as u64));
     g.bench_function("pool walks", |b| {
