@@ -207,3 +207,35 @@ fn cmlt_with_manifold_moves_converges_to_bdpt() {
         );
     }
 }
+
+/// λ tuned in a warm-up on copies of the seeded chains, then frozen: the recorded chains still
+/// converge to BDPT, and the warm-up's last batch is near the target acceptance.
+#[test]
+fn memlt_with_tuned_lambda_converges_to_bdpt() {
+    let scene = scene("pool");
+    let mut m = mutations(MutationProbabilities::manifold_exploration());
+    m.manifold.target_acceptance = Some(0.5);
+    let mlt = PathMlt::new(m).unwrap();
+    let (images, stats) =
+        blocks_and_stats(metropolis_runs(&scene, &mlt, settings(4000, 32.0, 95), 8));
+    let p = min_p(&images, &bdpt_batches(&scene));
+    let t = mlt.tuning().expect("tuned");
+    report("pool", &format!("memlt, {t}"), p, &stats);
+    assert!((t.acceptance - 0.5).abs() < 0.1, "{t}");
+    assert!(t.lambda < t.initial, "{t}");
+    assert!(
+        p > ALPHA,
+        "MEMLT with tuned λ disagrees with BDPT (p = {p:.2e})"
+    );
+    let bad = Mutations {
+        manifold: light_transport::pathspace::ManifoldPerturbationSettings {
+            target_acceptance: Some(1.5),
+            ..Default::default()
+        },
+        ..mutations(MutationProbabilities::manifold_exploration())
+    };
+    assert!(
+        PathMlt::new(bad).is_err(),
+        "a target acceptance of 1.5 is refused"
+    );
+}

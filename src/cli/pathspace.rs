@@ -90,6 +90,10 @@ pub struct PathSpaceArgs {
     /// density there (larger: smaller steps; the paper uses 50–500).
     #[arg(long, default_value_t = 50.0)]
     pub lambda: f64,
+    /// Tune λ in a warm-up (not recorded) toward this acceptance of the manifold perturbation,
+    /// starting from --lambda, then freeze it (memlt, mept).
+    #[arg(long)]
+    pub lambda_target: Option<f64>,
     /// Manifold walk: most iterations.
     #[arg(long, default_value_t = 20)]
     pub manifold_iterations: usize,
@@ -123,6 +127,8 @@ impl PathSpaceArgs {
                 max_iterations: self.manifold_iterations,
                 epsilon: self.manifold_epsilon,
             },
+            target_acceptance: self.lambda_target,
+            tuning: None,
             defect: None,
         }
     }

@@ -57,6 +57,12 @@ pub trait Method: Sync {
     }
     /// Names of the move kinds (for statistics).
     fn kinds(&self) -> Vec<String>;
+    /// Called once with the seeded chains before any is run or recorded (e.g. to tune a kernel's
+    /// parameter on copies of them and freeze it: the recorded chains then run an ordinary fixed
+    /// kernel from their unbiased seeds). `seed` is the render's master seed. Nothing by default.
+    fn warm_up(&self, _scene: &Scene, _chains: &[Chain<Self::State>], _seed: u64) -> Result<()> {
+        Ok(())
+    }
     /// Lines the method adds to the render's summary (e.g. statistics of its moves beyond
     /// acceptance); none by default.
     fn details(&self) -> Vec<String> {
@@ -329,6 +335,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let mut rngs: Vec<ChainRng> = (0..chains.len())
         .map(|c| substream(settings.seed, CHAINS, c as u64))
         .collect();
+    method.warm_up(scene, &chains, settings.seed)?;
     stats.seed_time = t.elapsed();
     // 3. Chains in rounds; a round is made of slices (at most SLICES, and cut at every exchange),
     //    so an interrupt stops within a fraction of a round.

@@ -70,9 +70,21 @@ const PILOT_STREAM: u64 = 0xE4F7;
 
 impl Erpt {
     /// Set up ERPT on `scene`: validates the settings and runs the pilot for `e_d`.
-    pub fn new(scene: &Scene, settings: ErptSettings) -> Result<Self> {
+    pub fn new(scene: &Scene, mut settings: ErptSettings) -> Result<Self> {
+        settings.mutations.validate()?;
+        let manifold = ["manifold-light", "manifold-eye"]
+            .iter()
+            .map(|n| settings.mutations.probabilities.probability(n))
+            .sum::<f64>();
+        if let Some(target) = settings.mutations.manifold.target_acceptance
+            && manifold > 0.0
+        {
+            // λ tuned on chains resampled from independent paths, frozen before rendering.
+            let t = super::lambda_tuning::tune_lambda(scene, &settings.mutations, target, 0)?;
+            settings.mutations.manifold.lambda = t.lambda;
+            settings.mutations.manifold.tuning = Some(t);
+        }
         let m = &settings.mutations;
-        m.validate()?;
         if settings.chain_length == 0 || settings.pilot == 0 {
             return Err(Error::InvalidParameter {
                 name: "erpt".into(),
@@ -128,6 +140,9 @@ impl Erpt {
                 .lines()
                 .map(str::to_string),
         );
+        if let Some(t) = &self.settings.mutations.manifold.tuning {
+            out.push(format!("lambda     {t}"));
+        }
         let walks = self.walk_stats();
         if walks.walks > 0 {
             out.push(format!("walks      {}", walks.summary()));

@@ -67,6 +67,11 @@ pub struct ManifoldPerturbationSettings {
     pub lambda: f64,
     /// The manifold walk.
     pub walk: ManifoldSettings,
+    /// Tune `λ` in a warm-up toward this acceptance of the perturbation, then freeze it
+    /// ([`super::lambda_tuning`]); `None`: use `lambda` as given.
+    pub target_acceptance: Option<f64>,
+    /// How `λ` was chosen, when a warm-up tuned it ([`super::lambda_tuning`]).
+    pub tuning: Option<super::lambda_tuning::LambdaTuning>,
     /// A deliberate error, for showing that the tests see one (`None` outside those tests).
     #[doc(hidden)]
     pub defect: Option<ManifoldDefect>,
@@ -86,6 +91,8 @@ impl Default for ManifoldPerturbationSettings {
         Self {
             lambda: 50.0,
             walk: ManifoldSettings::default(),
+            target_acceptance: None,
+            tuning: None,
             defect: None,
         }
     }
@@ -100,14 +107,15 @@ impl ManifoldPerturbationSettings {
             && w.max_iterations >= 1
             && w.epsilon > 0.0
             && w.epsilon < 1.0
+            && self.target_acceptance.is_none_or(|a| a > 0.0 && a < 1.0)
         {
             Ok(())
         } else {
             Err(crate::Error::InvalidParameter {
                 name: "manifold perturbation".into(),
                 reason: format!(
-                    "need λ > 0, at least one walk iteration and 0 < ε < 1; got λ = {}, N = {}, ε = {}",
-                    self.lambda, w.max_iterations, w.epsilon
+                    "need λ > 0, at least one walk iteration, 0 < ε < 1 and a target acceptance in (0, 1); got λ = {}, N = {}, ε = {}, target {:?}",
+                    self.lambda, w.max_iterations, w.epsilon, self.target_acceptance
                 ),
             })
         }

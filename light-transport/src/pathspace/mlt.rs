@@ -7,6 +7,7 @@
 //! seeds the chains without start-up bias. Chains then move freely between lengths (bidirectional
 //! and new-path mutations); the new-path mutation picks lengths in proportion to `b_k`.
 
+use super::lambda_tuning::{LambdaTuning, tune_lambda_from};
 use super::mutations::Mutations;
 use super::new_path::NewPath;
 use super::state::PathState;
@@ -26,6 +27,7 @@ pub struct PathMlt {
     pub mutations: Mutations,
     new_path: RwLock<NewPath>,
     walks: Mutex<WalkStats>,
+    tuning: RwLock<Option<LambdaTuning>>,
 }
 
 impl PathMlt {
@@ -35,6 +37,7 @@ impl PathMlt {
         Ok(Self {
             new_path: RwLock::new(NewPath::uniform(mutations.max_edges)),
             walks: Mutex::new(WalkStats::default()),
+            tuning: RwLock::new(None),
             mutations,
         })
     }
@@ -42,6 +45,21 @@ impl PathMlt {
     /// The manifold walks of the chains so far (the manifold perturbation's).
     pub fn walk_stats(&self) -> WalkStats {
         self.walks.lock().map_or_else(|e| *e.into_inner(), |g| *g)
+    }
+
+    /// How the warm-up chose `λ` (when the settings ask for it and the warm-up has run).
+    pub fn tuning(&self) -> Option<LambdaTuning> {
+        self.tuning.read().map_or_else(|e| *e.into_inner(), |g| *g)
+    }
+
+    /// The mutations the chains run: the settings', with `λ` as tuned.
+    fn running(&self) -> Mutations {
+        let mut m = self.mutations.clone();
+        if let Some(t) = self.tuning() {
+            m.manifold.lambda = t.lambda;
+            m.manifold.tuning = Some(t);
+        }
+        m
     }
 
     /// The current new-path length distribution.
@@ -91,9 +109,8 @@ impl Method for PathMlt {
         observer: &mut O,
     ) {
         // Validated in `new`: building the mixture cannot fail.
-        if let Ok(proposal) =
-            self.mutations
-                .proposal_recording(scene, self.new_path(), Some(&self.walks))
+        let running = self.running();
+        if let Ok(proposal) = running.proposal_recording(scene, self.new_path(), Some(&self.walks))
         {
             Mutations::run(&proposal, chain, n, rng, observer);
         }
@@ -108,9 +125,8 @@ impl Method for PathMlt {
         observer: &mut O,
     ) {
         // One mixture for the whole group (validated in `new`: building it cannot fail).
-        if let Ok(proposal) =
-            self.mutations
-                .proposal_recording(scene, self.new_path(), Some(&self.walks))
+        let running = self.running();
+        if let Ok(proposal) = running.proposal_recording(scene, self.new_path(), Some(&self.walks))
         {
             for (chain, rng) in chains.iter_mut().zip(rngs.iter_mut()) {
                 Mutations::run(&proposal, chain, n, rng, observer);
@@ -122,11 +138,34 @@ impl Method for PathMlt {
         Mutations::kinds()
     }
 
-    fn details(&self) -> Vec<String> {
-        let w = self.walk_stats();
-        if w.walks == 0 {
-            return Vec::new();
+    fn warm_up(&self, scene: &Scene, chains: &[Chain<PathState>], seed: u64) -> Result<()> {
+        let m = &self.mutations;
+        let manifold = m
+            .probabilities
+            .probability(super::manifold_perturbation::TOWARD_LIGHT.name)
+            + m.probabilities
+                .probability(super::manifold_perturbation::TOWARD_EYE.name);
+        let Some(target) = m.manifold.target_acceptance.filter(|_| manifold > 0.0) else {
+            return Ok(());
+        };
+        let states: Vec<PathState> = chains.iter().map(|c| c.state.clone()).collect();
+        let t = tune_lambda_from(scene, m, target, &states, seed)?;
+        match self.tuning.write() {
+            Ok(mut g) => *g = Some(t),
+            Err(e) => *e.into_inner() = Some(t),
         }
-        vec![format!("walks      {}", w.summary())]
+        Ok(())
+    }
+
+    fn details(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if let Some(t) = self.tuning() {
+            out.push(format!("lambda     {t}"));
+        }
+        let w = self.walk_stats();
+        if w.walks > 0 {
+            out.push(format!("walks      {}", w.summary()));
+        }
+        out
     }
 }

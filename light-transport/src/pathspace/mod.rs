@@ -19,6 +19,7 @@
 pub mod bidirectional;
 pub mod caustic;
 pub mod erpt;
+pub mod lambda_tuning;
 pub mod lens;
 pub mod lens_subpath;
 pub mod manifold_perturbation;
