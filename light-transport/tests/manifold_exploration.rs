@@ -68,18 +68,27 @@ fn memlt_converges_to_bdpt_on_every_builtin_scene() {
 
 /// The convergence test sees a wrong transition density. At λ = 50 and 32 mutations per pixel the
 /// chains barely leave their seeds (which are unbiased), so a wrong kernel has no time to show;
-/// here λ = 5 (larger steps) and 128 mutations per pixel on the Cornell box, whose glass sphere
-/// magnifies strongly. MEMLT whose `T` forgets the first chain's generalised geometry term
-/// (sampling `f G` instead of `f`) is caught, and the correct MEMLT passes at the same settings.
-/// Measured: broken p = 1.4e-7; correct as printed. (The same defect on the pool is not seen at
-/// any of λ = 5 / 128, 50 / 256 mutations per pixel, p ≥ 0.02: the pool's magnification through
-/// gentle waves is nearly constant, so `f G` and `f` differ little.)
+/// here λ = 5 (larger steps), 128 mutations per pixel, the manifold perturbation in both
+/// directions (0.45 each) with new paths (0.1), on the Cornell box, whose glass sphere magnifies
+/// strongly. A perturbation whose `T` forgets the first chain's generalised geometry term
+/// (sampling `f G` instead of `f`) is caught, and the correct one passes at the same settings.
+/// Measured: broken p = 8.3e-7, correct p = 1.0. (With the bidirectional mutation in the mixture
+/// too the broken one gave p = 1.7e-4 — too close to α; on the pool the same defect is not seen at
+/// all, p ≥ 0.02: its magnification through gentle waves is nearly constant, so `f G` and `f`
+/// differ little.)
 #[test]
 fn memlt_without_the_first_chains_geometry_term_is_caught() {
     let scene = scene("cornell");
     let reference = bdpt_batches(&scene);
     for defect in [Some(ManifoldDefect::FirstChainGeometry), None] {
-        let mut m = mutations(MutationProbabilities::manifold_exploration());
+        let mut m = mutations(
+            MutationProbabilities::of(&[
+                ("manifold-light", 0.45),
+                ("manifold-eye", 0.45),
+                ("new-path", 0.1),
+            ])
+            .unwrap(),
+        );
         m.manifold.lambda = 5.0;
         m.manifold.defect = defect;
         let mlt = PathMlt::new(m).unwrap();

@@ -9,12 +9,15 @@
 //! * `P1 = light → mirror → floor → lens`: `F = L_e G(x_0 ↔ m ↔ x_2) ρ f_floor G(x_2, lens) W_e`;
 //! * `P2 = light → floor → mirror → lens`: `F = L_e G(x_0, x_1) f_floor ρ G(x_1 ↔ m ↔ lens) W_e`.
 //!
-//! Each path has one strategy per direction: from the lens (toward the light) or from the light
-//! (toward the eye). The first chain from `x_a` to `x_b` is traced; the second is walked (`P1`
-//! from the lens and `P2` from the light walk the mirror vertex). The transition density is
-//! `T = D(ω') / |cos θ_a| · G(x_a ↔ … ↔ x'_b)`, with `D` the von Mises–Fisher density written here
-//! (concentration such that `D(ω) = λ² p(ω)`, `p` the camera's or the emitter's directional
-//! density at the current direction).
+//! Each path has one strategy toward the light (a direction move from the lens) and two toward the
+//! eye (a direction move from the light, and a position move of the light point), each chosen with
+//! probability ½. The first chain from `x_a` to `x_b` is traced; the second is walked (`P1` from
+//! the lens and `P2` from the light walk the mirror vertex; a position move walks the chain from
+//! the light point to the next non-specular vertex, which on `P1` is the mirror vertex). A
+//! direction move has `T = D(ω') / |cos θ_a| · G(x_a ↔ … ↔ x'_b)`, with `D` the von Mises–Fisher
+//! density written here (concentration such that `D(ω) = λ² p(ω)`, `p` the camera's or the
+//! emitter's directional density at the current direction); a position move has the Gaussian
+//! density of variance `ρ/(2πλ²)` in the light's plane, `ρ` the area of the light (one triangle).
 //!
 //! Checks: (b) the reported log acceptance ratio equals `ln[I(F(ȳ)) T(x̄|ȳ) / (I(F(x̄)) T(ȳ|x̄))]`
 //! from these formulas, in both directions on both paths (the walk's tolerance, 1e-7 of the
@@ -30,7 +33,7 @@ use light_transport::metropolis::ImportanceKind;
 use light_transport::path::{Vertex, VertexKind};
 use light_transport::pathspace::{FullPath, Mutations, NewPath, PathState};
 use light_transport::scene::builtin::SceneBuilder;
-use light_transport::scene::{MaterialDesc, Scene};
+use light_transport::scene::{MaterialDesc, Projection, Scene};
 use light_transport::spectrum::Rgb;
 use mcmc_core::ChainRng;
 use mcmc_core::rng::stream;
@@ -47,6 +50,9 @@ const MIRROR_X: f64 = -1.5;
 const LAMBDA: f64 = 50.0;
 const Z_LIMIT: f64 = 4.5;
 const BROKEN_SCALE: f64 = 1.15;
+const LENS_RADIUS: f64 = 0.02;
+/// The emitter is a 0.5 × 0.5 quad: two triangles, each a light of this area.
+const LIGHT_TRIANGLE_AREA: f64 = 0.125;
 
 fn scene() -> &'static Scene {
     static S: OnceLock<Scene> = OnceLock::new();
@@ -81,7 +87,16 @@ fn scene() -> &'static Scene {
             black,
             Some(Rgb::new(20.0, 18.0, 15.0)),
         );
-        Scene::new(&b.finish(), None).expect("scene")
+        // A thin lens (radius 0.02, in focus at the floor), so that the lens point moves too.
+        let mut d = b.finish();
+        if let Some(c) = d.camera.as_mut() {
+            c.projection = Projection::Perspective {
+                fov: 60f64.to_radians(),
+                lens_radius: LENS_RADIUS,
+                focal_distance: 4.0,
+            };
+        }
+        Scene::new(&d, None).expect("scene")
     })
 }
 
@@ -185,11 +200,9 @@ fn geometry(x: DVec3, nx: Option<DVec3>, m: Option<DVec3>, y: DVec3, ny: Option<
     cos_at(nx, dir(x, first)) * cos_at(ny, dir(y, last)) / (len * len)
 }
 
-fn we(to: DVec3) -> f64 {
-    let s = scene();
-    s.camera
-        .importance(s.camera.position(), dir(s.camera.position(), to))
-        .0
+/// The camera's importance of the ray from lens point `lens` toward `to`.
+fn we(lens: DVec3, to: DVec3) -> f64 {
+    scene().camera.importance(lens, dir(lens, to)).0
 }
 
 fn le(x0: DVec3, to: DVec3) -> f64 {
@@ -208,14 +221,14 @@ fn importance(p: &[DVec3], mirror_first: bool) -> f64 {
             * MIRROR
             * f_floor
             * geometry(p[2], ny, None, p[3], None)
-            * we(p[2])
+            * we(p[3], p[2])
     } else {
         le(p[0], p[1])
             * geometry(p[0], Some(-DVec3::Y), None, p[1], ny)
             * f_floor
             * MIRROR
             * geometry(p[1], ny, Some(p[2]), p[3], None)
-            * we(p[2])
+            * we(p[3], p[2])
     }
 }
 
@@ -241,19 +254,33 @@ fn transition(from: &[DVec3], to: &[DVec3], mirror_first: bool, from_lens: bool)
     let s = scene();
     let ny = Some(DVec3::Y);
     let down = Some(-DVec3::Y);
-    if from_lens {
+    if from_lens && (to[3] - from[3]).length() > 0.0 {
+        // A position move of the lens point (one of the two strategies from the lens): a Gaussian
+        // of variance ρ/(2πλ²) = R²/(2λ²) in the lens plane.
+        let var = LENS_RADIUS * LENS_RADIUS / (2.0 * LAMBDA * LAMBDA);
+        let d2 = (to[3] - from[3]).length_squared();
+        0.5 * (-d2 / (2.0 * var)).exp() / (TAU * var)
+    } else if from_lens {
+        // A direction move from the lens (the other of its two strategies).
         let (wx, wy) = (dir(from[3], from[2]), dir(to[3], to[2]));
         let p = s.camera.importance(from[3], wx).1;
-        let d = vmf_pdf(LAMBDA * LAMBDA * p, wx, wy) / cos_at(None, wy);
+        let d = 0.5 * vmf_pdf(LAMBDA * LAMBDA * p, wx, wy) / cos_at(None, wy);
         if mirror_first {
             d * geometry(to[3], None, None, to[2], ny)
         } else {
             d * geometry(to[3], None, Some(to[2]), to[1], ny)
         }
+    } else if (to[0] - from[0]).length() > 0.0 {
+        // A position move of the light point (one of the two strategies from the light): a
+        // Gaussian of variance ρ/(2πλ²) in the light's plane, ρ the area of its triangle.
+        let var = LIGHT_TRIANGLE_AREA / (TAU * LAMBDA * LAMBDA);
+        let d2 = (to[0] - from[0]).length_squared();
+        0.5 * (-d2 / (2.0 * var)).exp() / (TAU * var)
     } else {
+        // A direction move from the light (the other of its two strategies).
         let (wx, wy) = (dir(from[0], from[1]), dir(to[0], to[1]));
         let p = wx.dot(-DVec3::Y).max(0.0) / PI;
-        let d = vmf_pdf(LAMBDA * LAMBDA * p, wx, wy) / cos_at(down, wy);
+        let d = 0.5 * vmf_pdf(LAMBDA * LAMBDA * p, wx, wy) / cos_at(down, wy);
         if mirror_first {
             d * geometry(to[0], down, Some(to[1]), to[2], ny)
         } else {
@@ -278,13 +305,18 @@ fn propose(
     mutation.propose_ratio(x, rng, y)
 }
 
-/// The four cases: (path, mirror first, from the lens, mutation, which vertex is `x_b`).
+/// The cases: (path, mirror first, from the lens, mutation, which vertex the numerical check
+/// watches — `x_b`, or the light point for the position moves of the last two).
 fn cases() -> Vec<(PathState, bool, bool, &'static str, usize)> {
     vec![
         (p1(), true, true, "manifold-light", 2),
         (p1(), true, false, "manifold-eye", 2),
         (p2(), false, true, "manifold-light", 1),
         (p2(), false, false, "manifold-eye", 1),
+        (p1(), true, false, "manifold-eye", 0),
+        (p2(), false, false, "manifold-eye", 0),
+        (p1(), true, true, "manifold-light", 3),
+        (p2(), false, true, "manifold-light", 3),
     ]
 }
 
@@ -342,11 +374,21 @@ fn numerical(case: usize, n: usize, seed: u64) -> ((f64, f64, f64), (f64, f64, f
         }
     }
     let sigma = (spread / pilots.max(1) as f64).sqrt();
-    let (lo, hi) = (
-        c + DVec3::new(0.1 * sigma, 0.0, -0.6 * sigma),
-        c + DVec3::new(1.0 * sigma, 0.0, 0.5 * sigma),
-    );
-    let area = (hi.x - lo.x) * (hi.z - lo.z);
+    // Coordinates in the watched vertex's plane: x and z on the floor and the light (normal ±y),
+    // the lens's right and up axes on the lens.
+    let forward = scene().camera.forward();
+    let right = forward.cross(DVec3::Y).normalize();
+    let up = right.cross(forward);
+    let coords = |p: DVec3| {
+        let d = p - c;
+        if b == 3 {
+            (d.dot(right), d.dot(up))
+        } else {
+            (d.x, d.z)
+        }
+    };
+    let (lo, hi) = ((0.1 * sigma, -0.6 * sigma), (1.0 * sigma, 0.5 * sigma));
+    let area = (hi.0 - lo.0) * (hi.1 - lo.1);
     let (mut s, mut s2, mut bs, mut bs2, mut hits) = (0.0, 0.0, 0.0, 0.0, 0);
     for i in 0..n as u64 {
         let mut rng = stream(seed, i);
@@ -354,8 +396,8 @@ fn numerical(case: usize, n: usize, seed: u64) -> ((f64, f64, f64), (f64, f64, f
             continue;
         }
         let yp = positions(&y);
-        let p = yp[b];
-        if p.x < lo.x || p.x > hi.x || p.z < lo.z || p.z > hi.z {
+        let (u, v) = coords(yp[b]);
+        if u < lo.0 || u > hi.0 || v < lo.1 || v > hi.1 {
             continue;
         }
         hits += 1;
@@ -386,7 +428,7 @@ fn numerical(case: usize, n: usize, seed: u64) -> ((f64, f64, f64), (f64, f64, f
 
 #[test]
 fn the_sampler_draws_from_the_reported_density() {
-    for case in 0..4 {
+    for case in 0..8 {
         let n = std::env::var("MANIFOLD_N")
             .ok()
             .and_then(|v| v.parse().ok())

@@ -557,12 +557,21 @@ fn vmf_pdf(peak: f64, mean: DVec3, w: DVec3) -> f64 {
 }
 
 /// Manifold perturbation (non-specular paths: `x_b` is the neighbour of `x_a` and joins `x_c`
-/// directly) moving vertex `b` of `from` to make `to`: `x_a` uniform among the `k − 1` vertices
-/// this direction can start from, the new direction from the von Mises–Fisher distribution whose
-/// density at the current direction is `λ² p(ω_i → ω_o)`, turned into area at `x'_b` by
-/// `G(x_a, x'_b) / |cos θ_a|`.
+/// directly) moving vertex `b` of `from` to make `to`. Toward the light, `x_a` is uniform among the
+/// `k − 1` vertices this direction can start from; toward the eye, among those `k − 1` and the
+/// light's position move. A direction move draws the new direction from the von Mises–Fisher
+/// distribution whose density at the current direction is `λ² p(ω_i → ω_o)`, turned into area at
+/// `x'_b` by `G(x_a, x'_b) / |cos θ_a|`; the position move (`b = 0`) offsets the light point by a
+/// Gaussian of variance `ρ/(2πλ²)` in the light's plane, `ρ` the area of the light (one of the
+/// emitter quad's two triangles).
 fn t_manifold(f: &Fixture, from: &[Vertex], to: &[Vertex], b: usize, toward_light: bool) -> f64 {
     let k = from.len() - 1;
+    let strategies = if toward_light { k - 1 } else { k } as f64;
+    if b == 0 {
+        let var = f.light_area / 2.0 / (TAU * LAMBDA * LAMBDA);
+        let d2 = (to[0].p() - from[0].p()).length_squared();
+        return (-d2 / (2.0 * var)).exp() / (TAU * var) / strategies;
+    }
     let a = if toward_light { b + 1 } else { b - 1 };
     let behind = if toward_light {
         (a < k).then_some(a + 1)
@@ -572,7 +581,7 @@ fn t_manifold(f: &Fixture, from: &[Vertex], to: &[Vertex], b: usize, toward_ligh
     let p = solid_pdf(f, from, a, behind, b);
     let (w_from, w_to) = (dir(&from[a], &from[b]), dir(&to[a], &to[b]));
     let d = vmf_pdf(LAMBDA * LAMBDA * p, w_from, w_to);
-    d / cos_at(f, &to[a], w_to) * geometry(f, &to[a], &to[b]) / (k - 1) as f64
+    d / cos_at(f, &to[a], w_to) * geometry(f, &to[a], &to[b]) / strategies
 }
 
 /// New-path mutation: `P_len(k)/(k+1) · Σ_s p_s`.

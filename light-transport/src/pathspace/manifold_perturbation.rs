@@ -33,11 +33,17 @@
 //! deltas: light crossing a refraction changes étendue by η², and `G` from the light end would
 //! differ by that factor.
 //!
+//! **Position moves.** When `x_a` is an area light's point or a thin lens's point (the paper splits
+//! endpoints into a position and a direction vertex), the point moves on the light or lens by a
+//! tangential Gaussian offset of variance `ρ/(2πλ²)`, `ρ` the light's (triangle's) or the lens's
+//! area, and the chain from it to the next non-specular vertex `x_c` is walked. Nothing is kept on
+//! that side, so `T̃ = P(a) g(Δ) / I(F)` with `g` the Gaussian density per unit area of the
+//! light's plane or the lens and `F` the contribution without that side's `1/K`.
+//!
 //! Not yet: glossy chains on offset manifolds (eq. 11–12 and the specular probability ψ of the
-//! appendix), position perturbations of area lights and thick lenses, chains that start at a
-//! point light (its position has no area measure for the generalised geometry term), and the
-//! combined mixture rule (its `T̃` would need the walk's success for pairs this mutation did not
-//! propose; [`super::Mutations::validate`] refuses it).
+//! appendix), chains that start at a point light (its position has no area measure for the
+//! generalised geometry term), and the combined mixture rule (its `T̃` would need the walk's
+//! success for pairs this mutation did not propose; [`super::Mutations::validate`] refuses it).
 
 use super::mutation::{Change, Mutation, MutationContext, Registration};
 use super::path::retrace;
@@ -148,16 +154,20 @@ pub enum Toward {
 /// The three vertices of a perturbation (path indices).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Strategy {
-    /// Where the direction turns.
+    /// Where the direction turns (or the endpoint that moves, for a position move).
     pub a: usize,
-    /// The non-specular vertex the first chain reaches.
+    /// The non-specular vertex the first chain reaches (`a` itself for a position move).
     pub b: usize,
     /// The kept end of the second chain.
     pub c: usize,
+    /// A position move: `x_a` is an area light's point or a thin lens's point, displaced on the
+    /// light or the lens by a tangential Gaussian offset of variance `ρ/(2πλ²)` (`ρ` the light's or
+    /// the lens's area), the chain to `x_c` walked.
+    pub position: bool,
 }
 
 impl Strategy {
-    /// The lower and upper kept ends.
+    /// The lower and upper kept ends (for a position move the lower end, the light, moves).
     pub fn ends(&self) -> (usize, usize) {
         (self.a.min(self.c), self.a.max(self.c))
     }
@@ -165,6 +175,25 @@ impl Strategy {
     /// The record of the change.
     pub fn change(&self) -> Change {
         let (lo, hi) = self.ends();
+        match (self.position, self.a) {
+            // The light point moves: nothing kept before x_c.
+            (true, 0) => {
+                return Change {
+                    l: -1,
+                    m: hi,
+                    added: hi,
+                };
+            }
+            // The lens point moves: nothing kept after x_c.
+            (true, k) => {
+                return Change {
+                    l: lo as isize,
+                    m: k + 1,
+                    added: k - lo,
+                };
+            }
+            _ => {}
+        }
         Change {
             l: lo as isize,
             m: hi,
@@ -279,6 +308,9 @@ impl<'a> ManifoldPerturbation<'a> {
         {
             return never;
         }
+        if s.position {
+            return self.ln_position_density(x, y, s, count);
+        }
         let Some(d) = self.distribution(xp, s) else {
             return never;
         };
@@ -298,11 +330,252 @@ impl<'a> ManifoldPerturbation<'a> {
         let ln = density.ln() - cos_a.ln() + g_a.ln() - i.ln() - (count as f64).ln();
         if ln.is_nan() { never } else { ln }
     }
+
+    /// The standard deviation of a position move's offset on the light of vertex `v`
+    /// (`ρ/(2πλ²)` is its variance, `ρ` the light's area).
+    fn position_sigma(&self, v: &Vertex) -> Option<f64> {
+        let area = match v.kind {
+            VertexKind::Light { light } => match self.scene.lights[light as usize] {
+                LightKind::Area { area, .. } => area,
+                LightKind::Point { .. } => return None,
+            },
+            VertexKind::Camera => {
+                let r = self.scene.camera.lens_radius;
+                if !(r > 0.0) {
+                    return None;
+                }
+                std::f64::consts::PI * r * r
+            }
+            VertexKind::Surface => return None,
+        };
+        Some((area / (std::f64::consts::TAU * self.settings.lambda.powi(2))).sqrt())
+    }
+
+    /// `ln T̃` of a position move: `P(a) g(y_0 − x_0) / I(F(ȳ))` with `g` the Gaussian density
+    /// per unit area of the light's plane (both points on it).
+    fn ln_position_density(&self, x: &PathState, y: &PathState, s: &Strategy, count: usize) -> f64 {
+        let never = f64::NEG_INFINITY;
+        let (x0, y0) = (&x.path.vertices[s.a], &y.path.vertices[s.a]);
+        let Some(sigma) = self.position_sigma(x0) else {
+            return never;
+        };
+        let d = y0.p() - x0.p();
+        let camera = &self.scene.camera;
+        let off_lens = y0.kind == VertexKind::Camera
+            && (y0.p() - camera.position()).length() > camera.lens_radius;
+        if !coplanar(x0, y0) || off_lens {
+            return never;
+        }
+        let g = (-d.length_squared() / (2.0 * sigma * sigma)).exp()
+            / (std::f64::consts::TAU * sigma * sigma);
+        let i =
+            position_contribution(self.scene, &y.path, s).map_or(0.0, |f| self.importance.of(f));
+        if !(g > 0.0 && i > 0.0) {
+            return never;
+        }
+        let ln = g.ln() - i.ln() - (count as f64).ln();
+        if ln.is_nan() { never } else { ln }
+    }
+
+    /// A position move of `x` into `y`: the light or lens point displaced, the chain to `x_c`
+    /// walked.
+    fn propose_position(
+        &self,
+        x: &PathState,
+        s: &Strategy,
+        rng: &mut ChainRng,
+        y: &mut PathState,
+    ) -> Result<(), Failure> {
+        let scene = self.scene;
+        let xp = &x.path;
+        let xa = &xp.vertices[s.a];
+        let sigma = self.position_sigma(xa).ok_or(Failure::NotApplicable)?;
+        let (e1, e2) = chain_vertex(scene, xp, s.a)
+            .ok_or(Failure::Failed)?
+            .tangent_basis();
+        let gauss = |rng: &mut ChainRng| {
+            let (u1, u2) = (uniform(rng), uniform(rng));
+            (-2.0 * (1.0 - u1).ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+        };
+        let (z1, z2) = (gauss(rng), gauss(rng));
+        let p = xa.p() + (e1 * z1 + e2 * z2) * sigma;
+        let ya = if s.a == 0 {
+            // The light's surface at p: cast onto it from its front, along its normal.
+            let scale = (scene.bounds.1 - scene.bounds.0).length();
+            let n = xa.n();
+            let hit = scene
+                .intersect(&crate::geometry::Ray::new(p + n * (1e-4 * scale), -n))
+                .ok_or(Failure::Failed)?;
+            let (light, kind) = scene.light_at(hit.point.primitive).ok_or(Failure::Failed)?;
+            if kind.is_delta_position() || (hit.point.p - p).length() > 1e-7 * scale {
+                return Err(Failure::Failed);
+            }
+            Vertex {
+                kind: VertexKind::Light {
+                    light: light as u32,
+                },
+                bsdf: scene.bsdf(&hit.point).ok(),
+                point: hit.point,
+                wo: DVec3::ZERO,
+                beta: Rgb::BLACK,
+                delta: false,
+                pdf_fwd: 0.0,
+                pdf_rev: 0.0,
+            }
+        } else {
+            // On the lens; a point off the aperture carries no importance (f = 0 there).
+            let camera = &scene.camera;
+            if (p - camera.position()).length() > camera.lens_radius {
+                return Err(Failure::Failed);
+            }
+            Vertex {
+                kind: VertexKind::Camera,
+                point: scene.camera.lens_point(p),
+                ..xa.clone()
+            }
+        };
+        if !coplanar(xa, &ya) {
+            return Err(Failure::Failed);
+        }
+        let second = self.between(s.c, s.a);
+        let walked = self.walk_second_chain(xp, s.c, &second, s.a, &ya.point)?;
+        let yp = &mut y.path;
+        yp.vertices.clear();
+        yp.vertices.extend_from_slice(&xp.vertices);
+        yp.vertices[s.a] = ya;
+        for (&i, v) in second.iter().zip(walked) {
+            yp.vertices[i] = v;
+        }
+        let connection = if second.is_empty() { s.a.max(s.c) } else { 0 };
+        y.finish_candidate(scene, self.importance, s.change(), connection);
+        Ok(())
+    }
+
+    /// Walk the specular vertices `second` (listed from `c` toward `b`) of `path` so that the
+    /// chain from the fixed `x_c` ends at `target` instead of `x_b`, and back; the new specular
+    /// vertices (none when `second` is empty).
+    fn walk_second_chain(
+        &self,
+        path: &super::FullPath,
+        c: usize,
+        second: &[usize],
+        b: usize,
+        target: &crate::geometry::SurfacePoint,
+    ) -> Result<Vec<Vertex>, Failure> {
+        let scene = self.scene;
+        if second.is_empty() {
+            return Ok(Vec::new());
+        }
+        let chain: Option<Vec<ChainVertex>> = std::iter::once(c)
+            .chain(second.iter().copied())
+            .chain(std::iter::once(b))
+            .map(|i| chain_vertex(scene, path, i))
+            .collect();
+        let chain = chain.ok_or(Failure::Failed)?;
+        let material = if target.primitive == u32::MAX {
+            NO_MATERIAL
+        } else {
+            scene.primitive_material[target.primitive as usize]
+        };
+        let target = ChainVertex {
+            point: *target,
+            material,
+            interaction: Interaction::Reflect,
+            offset: [0.0; 2],
+        };
+        let walked = match self.stats.lock() {
+            Ok(mut stats) => {
+                walk_reversibly(scene, &chain, &target, &self.settings.walk, &mut stats)
+            }
+            Err(_) => None,
+        };
+        let forward = walked.ok_or(Failure::Failed)?;
+        let m = forward.chain.len();
+        Ok(forward.chain[1..m - 1]
+            .iter()
+            .map(|cv| Vertex {
+                kind: VertexKind::Surface,
+                bsdf: scene.bsdf(&cv.point).ok(),
+                point: cv.point,
+                wo: DVec3::ZERO,
+                beta: Rgb::BLACK,
+                delta: true,
+                pdf_fwd: 0.0,
+                pdf_rev: 0.0,
+            })
+            .collect())
+    }
+}
+
+/// Whether two light vertices lie in one plane (a position move stays in its light's plane, where
+/// its Gaussian density is symmetric).
+fn coplanar(a: &Vertex, b: &Vertex) -> bool {
+    let scale = 1.0 + a.p().length().max(b.p().length());
+    a.n().dot(b.n()) > 1.0 - 1e-9 && (b.p() - a.p()).dot(a.n()).abs() <= 1e-9 * scale
+}
+
+/// `F` of a position move's result. Light point moved: `L_e` times the chain to `x_c` (specular
+/// weights, the generalised geometry term from the camera end) and the camera side from `x_c`;
+/// nothing is kept on the light side, so no `1/K_L`. Lens point moved: the light side up to `x_c`,
+/// the chain, and `W_e`; nothing kept on the camera side, so no `1/K_C`.
+pub fn position_contribution(scene: &Scene, path: &super::FullPath, s: &Strategy) -> Option<Rgb> {
+    let v = &path.vertices;
+    let (lo, hi) = s.ends();
+    let ends = if s.a == 0 {
+        v[0].le(scene, &v[1]) * camera_side(scene, path, hi)?
+    } else {
+        let w = direction(&v[hi], &v[hi - 1]);
+        light_side(scene, path, lo)? * scene.camera.importance(v[hi].p(), w).0
+    };
+    let mut f = ends * chain_geometry(scene, path, lo, hi, hi);
+    for i in lo + 1..hi {
+        f *= vertex_factor(scene, path, i);
+    }
+    (f.is_finite() && !f.is_black()).then_some(f)
+}
+
+/// The light side of `path` up to its kept vertex `lo`: the light subpath's throughput arriving
+/// there times `f_s(x_lo)`, or `L_e/p(x_0)` at the light.
+fn light_side(scene: &Scene, path: &super::FullPath, lo: usize) -> Option<Rgb> {
+    let v = &path.vertices;
+    if lo == 0 {
+        let VertexKind::Light { light } = v[0].kind else {
+            return None;
+        };
+        let p = scene.light_distribution.pdf(light as usize)
+            * scene.lights[light as usize].pdf_position();
+        return Some(v[0].le(scene, &v[1]) * (1.0 / p));
+    }
+    let mut sub: Vec<Vertex> = v[..=lo].to_vec();
+    if retrace(scene, &mut sub, TransportMode::Importance) <= lo {
+        return None;
+    }
+    Some(sub[lo].beta * vertex_factor(scene, path, lo))
+}
+
+/// The camera side of `path` from its kept vertex `hi`: `f_s(x_hi)` times the camera walk's
+/// throughput arriving there, or `W_e/p(lens)` at the lens.
+fn camera_side(scene: &Scene, path: &super::FullPath, hi: usize) -> Option<Rgb> {
+    let v = &path.vertices;
+    let k = path.edges();
+    if hi == k {
+        let w = direction(&v[k], &v[k - 1]);
+        return Some(Rgb::splat(
+            scene.camera.importance(v[k].p(), w).0 / scene.camera.pdf_lens(),
+        ));
+    }
+    let mut sub: Vec<Vertex> = v[hi..].iter().rev().cloned().collect();
+    let j = k - hi;
+    if retrace(scene, &mut sub, TransportMode::Radiance) <= j {
+        return None;
+    }
+    Some(sub[j].beta * vertex_factor(scene, path, hi))
 }
 
 /// The strategies running `toward` on `path`: every non-specular `x_a` from which the first
 /// non-specular vertex `x_b` is a scattering surface and a second one `x_c` exists, excluding
-/// chains that start at a point light.
+/// chains that start at a point light; and the position move of the endpoint on this direction's
+/// side (the lens toward the light when it has an aperture, an area light toward the eye).
 pub fn strategies(scene: &Scene, path: &super::FullPath, toward: Toward) -> Vec<Strategy> {
     let k = path.edges();
     let mut out = Vec::new();
@@ -339,7 +612,12 @@ pub fn strategies(scene: &Scene, path: &super::FullPath, toward: Toward) -> Vec<
         let Some(c) = next_non_specular(b) else {
             continue;
         };
-        let s = Strategy { a, b, c };
+        let s = Strategy {
+            a,
+            b,
+            c,
+            position: false,
+        };
         let (lo, hi) = s.ends();
         // A specular chain between a point light and x_b.
         let starts_at_point_light = point_light && lo == 0 && b > 1;
@@ -347,6 +625,34 @@ pub fn strategies(scene: &Scene, path: &super::FullPath, toward: Toward) -> Vec<
             continue;
         }
         out.push(s);
+    }
+    // Position moves of a thin lens's point, toward the light.
+    if toward == Toward::Light
+        && scene.camera.lens_radius > 0.0
+        && let Some(c) = next_non_specular(k)
+    {
+        out.push(Strategy {
+            a: k,
+            b: k,
+            c,
+            position: true,
+        });
+    }
+    // Position moves of an area light's point, toward the eye.
+    let area_light = matches!(
+        v[0].kind,
+        VertexKind::Light { light } if !scene.lights[light as usize].is_delta_position()
+    );
+    if toward == Toward::Eye
+        && area_light
+        && let Some(c) = next_non_specular(0)
+    {
+        out.push(Strategy {
+            a: 0,
+            b: 0,
+            c,
+            position: true,
+        });
     }
     out
 }
@@ -441,35 +747,10 @@ fn vertex_factor(scene: &Scene, path: &super::FullPath, i: usize) -> Rgb {
 /// (module docs); `None` when a factor is missing.
 pub fn contribution(scene: &Scene, path: &super::FullPath, s: &Strategy) -> Option<Rgb> {
     let (lo, hi) = s.ends();
-    let v = &path.vertices;
-    let k = path.edges();
     // A_lo: the light side up to x_lo, with x_lo's factor.
-    let a_lo = if lo == 0 {
-        let VertexKind::Light { light } = v[0].kind else {
-            return None;
-        };
-        let p = scene.light_distribution.pdf(light as usize)
-            * scene.lights[light as usize].pdf_position();
-        v[0].le(scene, &v[1]) * (1.0 / p)
-    } else {
-        let mut sub: Vec<Vertex> = v[..=lo].to_vec();
-        if retrace(scene, &mut sub, TransportMode::Importance) <= lo {
-            return None;
-        }
-        sub[lo].beta * vertex_factor(scene, path, lo)
-    };
+    let a_lo = light_side(scene, path, lo)?;
     // A_hi: the camera side down to x_hi, with x_hi's factor.
-    let a_hi = if hi == k {
-        let w = direction(&v[k], &v[k - 1]);
-        Rgb::splat(scene.camera.importance(v[k].p(), w).0 / scene.camera.pdf_lens())
-    } else {
-        let mut sub: Vec<Vertex> = v[hi..].iter().rev().cloned().collect();
-        let j = k - hi;
-        if retrace(scene, &mut sub, TransportMode::Radiance) <= j {
-            return None;
-        }
-        sub[j].beta * vertex_factor(scene, path, hi)
-    };
+    let a_hi = camera_side(scene, path, hi)?;
     let mut f = a_lo * a_hi * vertex_factor(scene, path, s.b);
     for i in (lo + 1..hi).filter(|&i| i != s.b) {
         f *= vertex_factor(scene, path, i);
@@ -499,6 +780,9 @@ impl Mutation for ManifoldPerturbation<'_> {
         }
         let pick = ((uniform(rng) * list.len() as f64) as usize).min(list.len() - 1);
         let s = list[pick];
+        if s.position {
+            return self.propose_position(x, &s, rng, y);
+        }
         let xp = &x.path;
         let d = self.distribution(xp, &s).ok_or(Failure::Failed)?;
         let mut w = d.sample([uniform(rng), uniform(rng)]);
@@ -522,46 +806,10 @@ impl Mutation for ManifoldPerturbation<'_> {
             first.push(v);
         }
         let y_b = first.last().ok_or(Failure::Failed)?.clone();
-        // The second chain: walk it from x_c to x'_b.
+        // The second chain: walk it from x_c to x'_b (and back).
         let second = self.between(s.c, s.b);
-        let mut walked: Vec<Vertex> = Vec::new();
-        let mut connection = 0;
-        if second.is_empty() {
-            connection = s.b.max(s.c);
-        } else {
-            let chain: Option<Vec<ChainVertex>> = std::iter::once(s.c)
-                .chain(second.iter().copied())
-                .chain(std::iter::once(s.b))
-                .map(|i| chain_vertex(scene, xp, i))
-                .collect();
-            let chain = chain.ok_or(Failure::Failed)?;
-            let target = ChainVertex {
-                point: y_b.point,
-                material: scene.primitive_material[y_b.point.primitive as usize],
-                interaction: Interaction::Reflect,
-                offset: [0.0; 2],
-            };
-            let mut stats = WalkStats::default();
-            let walked_chain =
-                walk_reversibly(scene, &chain, &target, &self.settings.walk, &mut stats);
-            if let Ok(mut s) = self.stats.lock() {
-                s.merge(&stats);
-            }
-            let forward = walked_chain.ok_or(Failure::Failed)?;
-            let m = forward.chain.len();
-            for cv in &forward.chain[1..m - 1] {
-                walked.push(Vertex {
-                    kind: VertexKind::Surface,
-                    bsdf: scene.bsdf(&cv.point).ok(),
-                    point: cv.point,
-                    wo: DVec3::ZERO,
-                    beta: Rgb::BLACK,
-                    delta: true,
-                    pdf_fwd: 0.0,
-                    pdf_rev: 0.0,
-                });
-            }
-        }
+        let walked = self.walk_second_chain(xp, s.c, &second, s.b, &y_b.point)?;
+        let connection = if second.is_empty() { s.b.max(s.c) } else { 0 };
         // ȳ: x̄ with the first chain at `path_b`, x'_b, and the walked chain at `second`.
         let yp = &mut y.path;
         yp.vertices.clear();
