@@ -148,9 +148,9 @@ fn mept_converges_to_bdpt_on_every_builtin_scene() {
         s.pilot = 2048;
         s.mutations = mutations(MutationProbabilities::manifold());
         // The pool's seeds need 16 per pixel (rare bright caustic paths, see `pathspace.rs`);
-        // a quarter of a chain per seed keeps its cost near the other scenes'.
+        // an eighth of a chain per seed keeps its cost near the other scenes'.
         if name.starts_with("pool") {
-            s.chains_per_seed = 0.25;
+            s.chains_per_seed = 0.125;
         }
         let mept = Erpt::new(&scene, s).unwrap();
         let spp = if name.starts_with("pool") { 16.0 } else { 4.0 };
