@@ -27,6 +27,9 @@
 //! non-reversible loses its mass). z-tests with fixed seeds, |z| < 4.5 (false-positive rate
 //! 6.8e-6 per check); the same estimates with `T × 1.15` must fail.
 
+mod common;
+
+use common::vmf_pdf;
 use light_transport::geometry::Ray;
 use light_transport::math::DVec3;
 use light_transport::metropolis::ImportanceKind;
@@ -230,22 +233,6 @@ fn importance(p: &[DVec3], mirror_first: bool) -> f64 {
             * geometry(p[1], ny, Some(p[2]), p[3], None)
             * we(p[3], p[2])
     }
-}
-
-/// Density of the von Mises–Fisher distribution about `mean` whose density at `mean` is `peak`.
-fn vmf_pdf(peak: f64, mean: DVec3, w: DVec3) -> f64 {
-    let at_mean = |k: f64| k / (TAU * (1.0 - (-2.0 * k).exp()));
-    let (mut lo, mut hi) = (1e-9f64, 1e12f64);
-    for _ in 0..300 {
-        let mid = (lo * hi).sqrt();
-        if at_mean(mid) < peak {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    let k = (lo * hi).sqrt();
-    k * (k * (mean.dot(w) - 1.0)).exp() / (TAU * (1.0 - (-2.0 * k).exp()))
 }
 
 /// `T(to|from)` of the perturbation from the lens (`from_lens`) or the light, on paths of the

@@ -48,6 +48,9 @@
 //! vertices (`ω_l` toward the light end; Veach 1997 §5.3), written here from its definition, while
 //! densities stay solid-angle BSDF densities converted with geometric cosines.
 
+mod common;
+
+use common::vmf_pdf;
 use light_transport::Rgb;
 use light_transport::bsdf::TransportMode;
 use light_transport::geometry::Ray;
@@ -538,23 +541,6 @@ fn t_bidirectional(
 
 /// `λ` of the manifold perturbation (the library's default).
 const LAMBDA: f64 = 50.0;
-
-/// Density of the von Mises–Fisher distribution about `mean` whose density at `mean` is `peak`,
-/// at `w`: `κ e^{κ(μ·w − 1)} / (2π (1 − e^{−2κ}))`, `κ` found here by bisection.
-fn vmf_pdf(peak: f64, mean: DVec3, w: DVec3) -> f64 {
-    let at_mean = |k: f64| k / (TAU * (1.0 - (-2.0 * k).exp()));
-    let (mut lo, mut hi) = (1e-9f64, 1e12f64);
-    for _ in 0..300 {
-        let mid = (lo * hi).sqrt();
-        if at_mean(mid) < peak {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    let k = (lo * hi).sqrt();
-    k * (k * (mean.dot(w) - 1.0)).exp() / (TAU * (1.0 - (-2.0 * k).exp()))
-}
 
 /// Manifold perturbation (non-specular paths: `x_b` is the neighbour of `x_a` and joins `x_c`
 /// directly) moving vertex `b` of `from` to make `to`. Toward the light, `x_a` is uniform among the

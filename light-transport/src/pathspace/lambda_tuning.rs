@@ -57,6 +57,21 @@ const GAIN: f64 = 4.0;
 /// Mutations per chain per batch.
 const STEPS: u64 = 16;
 
+/// The warm-up's mutations: `mutations` with the manifold perturbation alone (after checking that
+/// `target` is an acceptance in `(0, 1)`).
+fn warm_up_mutations(mutations: &Mutations, target: f64) -> Result<Mutations> {
+    if !(target > 0.0 && target < 1.0) {
+        return Err(Error::InvalidParameter {
+            name: "λ target acceptance".into(),
+            reason: format!("need a value in (0, 1), got {target}"),
+        });
+    }
+    let mut m = mutations.clone();
+    m.probabilities = MutationProbabilities::manifold();
+    m.validate()?;
+    Ok(m)
+}
+
 /// Tune `mutations.manifold.lambda` toward acceptance `target` (in `(0, 1)`) on `scene`, from
 /// warm-up chains resampled from independent paths (for integrators without a seeded population,
 /// such as MEPT); returns the frozen value and its record. Errors when no path the perturbation
@@ -67,15 +82,7 @@ pub fn tune_lambda(
     target: f64,
     seed: u64,
 ) -> Result<LambdaTuning> {
-    if !(target > 0.0 && target < 1.0) {
-        return Err(Error::InvalidParameter {
-            name: "λ target acceptance".into(),
-            reason: format!("need a value in (0, 1), got {target}"),
-        });
-    }
-    let mut m = mutations.clone();
-    m.probabilities = MutationProbabilities::manifold();
-    m.validate()?;
+    let m = warm_up_mutations(mutations, target)?;
     let probe = m.proposal(scene, NewPath::uniform(m.max_edges))?;
     // Warm-up chains start from paths resampled in proportion to their importance weights (as
     // the driver seeds its chains), among independent paths of every length that the
@@ -95,7 +102,7 @@ pub fn tune_lambda(
     }
     let total_weight: f64 = pool.iter().map(|p| p.1).sum();
     let mut pick = stream(seed ^ 0x1A4B_DA02, 0);
-    let mut chains: Vec<Chain<PathState>> = Vec::with_capacity(CHAINS);
+    let mut states: Vec<PathState> = Vec::with_capacity(CHAINS);
     if total_weight > 0.0 {
         for _ in 0..CHAINS {
             let mut u = uniform(&mut pick) * total_weight;
@@ -106,13 +113,10 @@ pub fn tune_lambda(
                     u < 0.0
                 })
                 .unwrap_or(&pool[pool.len() - 1]);
-            if let Ok(c) = Chain::with_density(chosen.0.clone(), 0.0) {
-                chains.push(c);
-            }
+            states.push(chosen.0.clone());
         }
     }
     drop(probe);
-    let states: Vec<PathState> = chains.into_iter().map(|c| c.state).collect();
     tune_lambda_from(scene, mutations, target, &states, seed)
 }
 
@@ -126,15 +130,7 @@ pub fn tune_lambda_from(
     states: &[PathState],
     seed: u64,
 ) -> Result<LambdaTuning> {
-    if !(target > 0.0 && target < 1.0) {
-        return Err(Error::InvalidParameter {
-            name: "λ target acceptance".into(),
-            reason: format!("need a value in (0, 1), got {target}"),
-        });
-    }
-    let mut m = mutations.clone();
-    m.probabilities = MutationProbabilities::manifold();
-    m.validate()?;
+    let mut m = warm_up_mutations(mutations, target)?;
     let probe = m.proposal(scene, NewPath::uniform(m.max_edges))?;
     let movable: Vec<&PathState> = states
         .iter()

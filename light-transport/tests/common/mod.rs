@@ -234,3 +234,26 @@ pub fn tilted_floor() -> light_transport::scene::SceneDescription {
     );
     s.finish()
 }
+
+/// Density of the von Mises–Fisher distribution about `mean` whose density at `mean` is `peak`,
+/// at `w`: `κ e^{κ(μ·w − 1)} / (2π (1 − e^{−2κ}))`, `κ` found here by bisection (written
+/// independently of the library's, for the manifold perturbation's density checks).
+pub fn vmf_pdf(
+    peak: f64,
+    mean: light_transport::math::DVec3,
+    w: light_transport::math::DVec3,
+) -> f64 {
+    use std::f64::consts::TAU;
+    let at_mean = |k: f64| k / (TAU * (1.0 - (-2.0 * k).exp()));
+    let (mut lo, mut hi) = (1e-9f64, 1e12f64);
+    for _ in 0..300 {
+        let mid = (lo * hi).sqrt();
+        if at_mean(mid) < peak {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let k = (lo * hi).sqrt();
+    k * (k * (mean.dot(w) - 1.0)).exp() / (TAU * (1.0 - (-2.0 * k).exp()))
+}

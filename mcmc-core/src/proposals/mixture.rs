@@ -164,7 +164,15 @@ impl<'a, S> Mixture<'a, S> {
                     .components
                     .iter()
                     .zip(&self.ln_weights)
-                    .map(|(c, lw)| lw.exp() * suitability(c.as_ref(), x))
+                    // A component without weight is never chosen: its suitability is not asked
+                    // (it may be costly, e.g. a path mutation finding its strategies).
+                    .map(|(c, lw)| {
+                        if *lw == f64::NEG_INFINITY {
+                            0.0
+                        } else {
+                            lw.exp() * suitability(c.as_ref(), x)
+                        }
+                    })
                     .collect();
                 let total: f64 = w.iter().sum();
                 w.iter()
@@ -189,7 +197,15 @@ impl<'a, S> Mixture<'a, S> {
                 self.components
                     .iter()
                     .zip(&self.ln_weights)
-                    .map(|(c, lw)| lw.exp() * suitability(c.as_ref(), x))
+                    // A component without weight is never chosen: its suitability is not asked
+                    // (it may be costly, e.g. a path mutation finding its strategies).
+                    .map(|(c, lw)| {
+                        if *lw == f64::NEG_INFINITY {
+                            0.0
+                        } else {
+                            lw.exp() * suitability(c.as_ref(), x)
+                        }
+                    })
                     .collect(),
             ),
         }
