@@ -8,6 +8,15 @@
 use crate::geometry::SurfacePoint;
 use crate::math::{DVec3, Frame};
 
+/// The fixed direction whose projection onto the shading tangent plane is the first axis of
+/// every chain vertex's shading basis ([`ChainVertex::shading_basis`]); unit, chosen off the
+/// coordinate axes and diagonals so that no axis-aligned surface has a normal along it.
+pub const FRAME_REFERENCE: DVec3 = DVec3::new(
+    0.267_261_241_912_424_4,
+    0.534_522_483_824_848_8,
+    0.801_783_725_737_273_2,
+);
+
 /// How light leaves a specular vertex.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Interaction {
@@ -74,12 +83,33 @@ impl ChainVertex {
         (along(e1), along(e2))
     }
 
-    /// An orthonormal basis `(s₁, s₂)` of the shading tangent plane (perpendicular to `n_s`),
-    /// continuous with the geometric basis: the constraint's frame `T(x)` of eq. 6.
+    /// An orthonormal basis `(s₁, s₂)` of the shading tangent plane (perpendicular to `n_s`): the
+    /// constraint's frame `T(x)` of eq. 6, in which a glossy vertex's offset `o` is written.
+    ///
+    /// It is a function of the shading normal alone — `s₁` the projection of the fixed direction
+    /// [`FRAME_REFERENCE`] onto the shading tangent plane, `s₂ = n_s × s₁` — so that it turns
+    /// with the point in a way the Jacobian knows exactly ([`ChainVertex::frame_turn`]) on any
+    /// surface, and does not jump between the triangles of a mesh (a frame built from `∂p/∂u`
+    /// would do both). Singular only where `n_s` is parallel to the reference.
     pub fn shading_basis(&self) -> (DVec3, DVec3) {
-        let (e1, _) = self.tangent_basis();
-        let f = Frame::from_normal_tangent(self.point.ns, e1);
+        let f = Frame::from_normal_tangent(self.point.ns, FRAME_REFERENCE);
         (f.s, f.t)
+    }
+
+    /// The rate at which the shading basis turns within its own plane when the shading normal
+    /// changes by `dn`: `ω = ∂s₁ · s₂`, so that `∂s₁ = −(s₁ · dn) n_s + ω s₂` and
+    /// `∂s₂ = −(s₂ · dn) n_s − ω s₁`. With `u = r − (r · n_s) n_s` (`r` the reference),
+    /// `s₁ = u/|u|` and `ω = −(r · n_s)(dn · s₂)/|u|`. Only offset manifolds (`o ≠ 0`) feel it.
+    pub fn frame_turn(&self, dn: DVec3) -> f64 {
+        let ns = self.point.ns;
+        let r = FRAME_REFERENCE;
+        let u = r - ns * r.dot(ns);
+        let len = u.length();
+        if !(len > 1e-10) {
+            return 0.0;
+        }
+        let (_, s2) = self.shading_basis();
+        -r.dot(ns) * dn.dot(s2) / len
     }
 
     /// The relative index `η = η_o/η_i` for light arriving from direction `wi` (pointing away

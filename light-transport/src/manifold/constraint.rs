@@ -12,16 +12,18 @@
 //!
 //! * `∂w/∂x_neighbour · δ = (δ − w (w · δ)) / ℓ` and `∂w/∂x_i · δ = −(δ − w (w · δ)) / ℓ`;
 //! * `∂h = (∂H − h (h · ∂H)) / |H|`;
-//! * `∂c_k/∂x_i · δ = s_k · ∂h − (a_k · ∂n_s) (n_s · h)`, the last term from the frame turning with
-//!   the normal (`∂n_s = δ_a ∂n_s/∂e₁ + δ_b ∂n_s/∂e₂`); the neighbours enter through `∂h` only.
+//! * `∂c_k/∂x_i · δ = s_k · ∂h + ∂s_k · h` with the frame's own motion
+//!   `∂s₁ = −(s₁ · ∂n_s) n_s + ω s₂`, `∂s₂ = −(s₂ · ∂n_s) n_s − ω s₁`: it tilts with the normal
+//!   (`∂n_s = δ_a ∂n_s/∂e₁ + δ_b ∂n_s/∂e₂`) and turns within its plane at the rate `ω` of
+//!   [`ChainVertex::frame_turn`]; the neighbours enter through `∂h` only.
 //!
 //! Index-matched refractions use `H` unnormalised (see [`ChainVertex::normalized`]).
 //!
-//! With `a_k` the shading basis of the current path, this is exact for ideal specular chains
-//! (`o = 0`), where any tangent frame gives the same manifold and the same tangent map. Offset
-//! manifolds (`o ≠ 0`) depend on how the frame moves with the point; the walk keeps the basis of
-//! each vertex's new position, whose rotation within the tangent plane this Jacobian does not
-//! carry (it would need second derivatives of the surface).
+//! The constraint the walk solves is [`constraint`], with each vertex's own shading basis; the
+//! blocks are its exact derivatives. The in-plane turn `ω` multiplies `s₂ · h` and `s₁ · h`, which
+//! vanish on ideal specular manifolds (`o = 0`, where any frame gives the same manifold and tangent
+//! map) and matter on offset manifolds (§5.2). [`constraint_in`] holds a given basis fixed
+//! instead (the frame of a linearisation point, projected): its derivatives lack the `ω` terms.
 
 use super::chain::ChainVertex;
 use super::{Mat2, Vec2};
@@ -106,28 +108,41 @@ pub fn jacobian_blocks(
         }
     };
     let tangent = |w: DVec3, l: f64, e: DVec3| (e - w * w.dot(e)) / l;
-    let row = |d: DVec3, dn: DVec3| {
-        let turn = ns.dot(h);
-        (s1.dot(d) - s1.dot(dn) * turn, s2.dot(d) - s2.dot(dn) * turn)
+    // dc_k = s_k · dh + ds_k · h, the frame tilting with the normal by dn and turning in its
+    // plane by ω (zero for the neighbours, whose frames do not enter).
+    let row = |d: DVec3, dn: DVec3, omega: f64| {
+        let tilt = ns.dot(h);
+        (
+            s1.dot(d) - s1.dot(dn) * tilt + omega * s2.dot(h),
+            s2.dot(d) - s2.dot(dn) * tilt - omega * s1.dot(h),
+        )
     };
     let block = |c1: (f64, f64), c2: (f64, f64)| Mat2::new(c1.0, c2.0, c1.1, c2.1);
     let lower = {
         let (e1, e2) = prev_basis;
-        let c1 = row(dh(tangent(wi, li, e1), DVec3::ZERO), DVec3::ZERO);
-        let c2 = row(dh(tangent(wi, li, e2), DVec3::ZERO), DVec3::ZERO);
+        let c1 = row(dh(tangent(wi, li, e1), DVec3::ZERO), DVec3::ZERO, 0.0);
+        let c2 = row(dh(tangent(wi, li, e2), DVec3::ZERO), DVec3::ZERO, 0.0);
         block(c1, c2)
     };
     let upper = {
         let (e1, e2) = next_basis;
-        let c1 = row(dh(DVec3::ZERO, tangent(wo, lo, e1)), DVec3::ZERO);
-        let c2 = row(dh(DVec3::ZERO, tangent(wo, lo, e2)), DVec3::ZERO);
+        let c1 = row(dh(DVec3::ZERO, tangent(wo, lo, e1)), DVec3::ZERO, 0.0);
+        let c2 = row(dh(DVec3::ZERO, tangent(wo, lo, e2)), DVec3::ZERO, 0.0);
         block(c1, c2)
     };
     let diagonal = {
         let (e1, e2) = v.tangent_basis();
         let (dn1, dn2) = v.normal_derivatives(e1, e2);
-        let c1 = row(dh(-tangent(wi, li, e1), -tangent(wo, lo, e1)), dn1);
-        let c2 = row(dh(-tangent(wi, li, e2), -tangent(wo, lo, e2)), dn2);
+        let c1 = row(
+            dh(-tangent(wi, li, e1), -tangent(wo, lo, e1)),
+            dn1,
+            v.frame_turn(dn1),
+        );
+        let c2 = row(
+            dh(-tangent(wi, li, e2), -tangent(wo, lo, e2)),
+            dn2,
+            v.frame_turn(dn2),
+        );
         block(c1, c2)
     };
     Some(Blocks {
