@@ -1099,6 +1099,7 @@ fn t_combined_but(
         l: k as isize - 2,
         m: k,
         added: 1,
+        pivot: 0,
     };
     if c == last && kt == k {
         let pl = p("lens") + p("multi-chain");
@@ -1111,6 +1112,7 @@ fn t_combined_but(
         l: k as isize - 2,
         m: k + 1,
         added: 2,
+        pivot: 0,
     };
     if k >= 2 && c == lens_tail && kt == k {
         terms.push(p("lens-subpath") * t_lens_subpath(f, to));
@@ -1119,6 +1121,7 @@ fn t_combined_but(
         l: -1,
         m: k + 1,
         added: kt + 1,
+        pivot: 0,
     };
     if c == whole {
         terms.push(p("new-path") * t_new_path(f, np, to));

@@ -5,7 +5,7 @@ use super::CliError;
 use super::metropolis::MetropolisArgs;
 use super::registry::Common;
 use clap::{Args, ValueEnum};
-use light_transport::manifold::ManifoldSettings;
+use light_transport::manifold::{ManifoldSettings, SpecularProbability};
 use light_transport::pathspace::{
     ManifoldPerturbationSettings, MutationProbabilities, Mutations, PerturbationSettings,
 };
@@ -100,6 +100,20 @@ pub struct PathSpaceArgs {
     /// Manifold walk: convergence tolerance relative to the scene's diagonal.
     #[arg(long, default_value_t = 1e-7)]
     pub manifold_epsilon: f64,
+    /// Manifold perturbation: let glossy vertices join specular chains, walked on offset manifolds,
+    /// with the specular probability ψ of Jakob & Marschner 2012, eq. 28 (false: glossy vertices
+    /// are always the chains' free ends).
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub manifold_glossy: bool,
+    /// ψ: the quantile q of the microfacet normals' angle that marks a glossy lobe's
+    /// high-density cone.
+    #[arg(long, default_value_t = 0.9)]
+    pub specular_quantile: f64,
+    /// ψ: Δθ, the expected change (radians) of a free glossy vertex's microfacet normal in one
+    /// perturbation. Default: measured by a pilot of the manifold perturbation in the warm-up
+    /// (memlt, mept, mlt with manifold moves), 0.05 where there is none (cmlt).
+    #[arg(long)]
+    pub normal_change: Option<f64>,
     /// ERPT: mutations per chain.
     #[arg(long, default_value_t = 100)]
     pub erpt_chain_length: u64,
@@ -126,6 +140,13 @@ impl PathSpaceArgs {
             walk: ManifoldSettings {
                 max_iterations: self.manifold_iterations,
                 epsilon: self.manifold_epsilon,
+            },
+            specular: SpecularProbability {
+                glossy: self.manifold_glossy,
+                quantile: self.specular_quantile,
+                normal_change: self.normal_change.unwrap_or(
+                    SpecularProbability::default().normal_change,
+                ),
             },
             target_acceptance: self.lambda_target,
             tuning: None,

@@ -10,6 +10,7 @@
 //! * [`tridiagonal`] — the O(n) block-tridiagonal solve (2×2 blocks), with a dense fallback;
 //! * [`geometry_term`] — the tangent map `−A⁻¹B` and the generalised geometry term (eq. 9);
 //! * [`walk`] — the predictor–corrector walk of §4 and its statistics;
+//! * [`specular_probability`] — the chance `ψ` that a glossy vertex joins a specular chain;
 //! * [`vmf`] — the von Mises–Fisher distribution of the manifold perturbation's directions;
 //! * [`probe`] — synthetic walks on a scene, for measuring success, iterations, reversibility.
 
@@ -17,6 +18,7 @@ pub mod chain;
 pub mod constraint;
 pub mod geometry_term;
 pub mod probe;
+pub mod specular_probability;
 pub mod tridiagonal;
 pub mod vmf;
 pub mod walk;
@@ -26,6 +28,7 @@ pub use constraint::{Blocks, constraint, constraint_in, jacobian_blocks};
 pub use geometry_term::{
     ChainJacobian, chain_jacobian, generalized_geometry, generalized_geometry_reverse, tangent_map,
 };
+pub use specular_probability::SpecularProbability;
 pub use tridiagonal::BlockTridiagonal;
 pub use vmf::VonMisesFisher;
 pub use walk::{

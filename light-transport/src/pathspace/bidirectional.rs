@@ -252,6 +252,7 @@ impl Bidirectional {
             l: d.l,
             m: d.m,
             added: n,
+            pivot: 0,
         };
         let (s, t) = (light.len(), cam.len());
         if y.path

@@ -104,6 +104,7 @@ impl Mutation for Caustic<'_> {
             l: i0 as isize,
             m: k,
             added: k - 1 - i0,
+            pivot: 0,
         };
         y.finish_candidate(scene, self.importance, change, k);
         Ok(())
@@ -120,6 +121,7 @@ impl Mutation for Caustic<'_> {
             l: i0 as isize,
             m: k,
             added: k - 1 - i0,
+            pivot: 0,
         };
         if yp.edges() != k
             || c != record

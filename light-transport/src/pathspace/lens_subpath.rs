@@ -101,6 +101,7 @@ impl Mutation for LensSubpath<'_> {
             l: j as isize - 1,
             m: xp.edges() + 1,
             added,
+            pivot: 0,
         };
         y.finish_candidate(scene, self.importance, change, j);
         Ok(())
@@ -116,6 +117,7 @@ impl Mutation for LensSubpath<'_> {
             l: j as isize - 1,
             m: kx + 1,
             added: (ky + 1).saturating_sub(j),
+            pivot: 0,
         }) || ky > self.max_edges
             || ky < j + 1
         {

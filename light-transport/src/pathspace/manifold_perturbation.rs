@@ -40,8 +40,23 @@
 //! that side, so `T̃ = P(a) g(Δ) / I(F)` with `g` the Gaussian density per unit area of the
 //! light's plane or the lens and `F` the contribution without that side's `1/K`.
 //!
-//! Not yet: glossy chains on offset manifolds (eq. 11–12 and the specular probability ψ of the
-//! appendix), chains that start at a point light (its position has no area measure for the
+//! **Glossy chains (§5.2).** A glossy vertex (every non-delta lobe GGX) joins a chain with its
+//! specular probability `ψ` ([`SpecularProbability`], eq. 28): having chosen `x_a` uniformly among
+//! the vertices where some strategy applies, the perturbation walks away from it and classifies
+//! each vertex — ideal specular ones always join, diffuse ones and endpoints never, glossy ones
+//! with probability `ψ` — until the first free vertex `x_b` and the next one `x_c`. A glossy vertex
+//! in a chain keeps its offset `o` (its microfacet normal in its shading frame, eq. 11): the first
+//! chain scatters about it, the walk keeps it. The classification's probability
+//! `Π ψ(x_i) (1 − ψ(x_b)) (1 − ψ(x_c))` enters `T`, and since `T` now lives on an offset manifold
+//! while `f` is a density over the glossy vertices' areas, `f` is taken in the measure of
+//! `(x_b, o)`: `F · |det ∂[x_b, x_glossy]/∂[x_b, o_glossy]|` (eq. 12's determinant; the
+//! constraint Jacobian over `x_{a+1} … x_{c−1}`, `x_b`'s rows made the identity, inverted, the
+//! rows and columns of ideal specular vertices dropped). `F` then keeps the glossy vertices'
+//! BSDFs in area measure, and the generalised geometry terms run between consecutive non-delta
+//! vertices. The record of a move names `x_b` ([`Change::pivot`]), which tells apart strategies
+//! that share their ends.
+//!
+//! Not yet: chains that start at a point light (its position has no area measure for the
 //! generalised geometry term), and the combined mixture rule (its `T̃` would need the walk's
 //! success for pairs this mutation did not propose; [`super::Mutations::validate`] refuses it).
 
@@ -53,8 +68,9 @@ use super::walk::trace;
 use crate::bsdf::TransportMode;
 use crate::light::LightKind;
 use crate::manifold::{
-    ChainVertex, Interaction, ManifoldSettings, NO_MATERIAL, VonMisesFisher, WalkStats,
-    generalized_geometry, generalized_geometry_reverse, walk_reversibly,
+    ChainVertex, Interaction, ManifoldSettings, NO_MATERIAL, SpecularProbability, VonMisesFisher,
+    WalkStats, chain_jacobian, constraint, generalized_geometry, generalized_geometry_reverse,
+    scatter, walk_manifold, walk_reversibly,
 };
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
@@ -73,6 +89,8 @@ pub struct ManifoldPerturbationSettings {
     pub lambda: f64,
     /// The manifold walk.
     pub walk: ManifoldSettings,
+    /// When glossy vertices join chains (`ψ`, §5.2).
+    pub specular: SpecularProbability,
     /// Tune `λ` in a warm-up toward this acceptance of the perturbation, then freeze it
     /// ([`super::lambda_tuning`]); `None`: use `lambda` as given.
     pub target_acceptance: Option<f64>,
@@ -90,6 +108,12 @@ pub enum ManifoldDefect {
     /// `T` without the generalised geometry term of the first chain: the density of `x'_b` taken
     /// as the density of the direction.
     FirstChainGeometry,
+    /// Moves accepted without walking back (non-reversible moves kept).
+    SkipReverseWalk,
+    /// The von Mises–Fisher density without its `κ` factor (`e^{κ(cos θ − 1)} / 2π(1 − e^{−2κ})`).
+    VmfNormaliser,
+    /// Glossy chains without eq. 12's determinant.
+    GlossyDeterminant,
 }
 
 impl Default for ManifoldPerturbationSettings {
@@ -97,6 +121,7 @@ impl Default for ManifoldPerturbationSettings {
         Self {
             lambda: 50.0,
             walk: ManifoldSettings::default(),
+            specular: SpecularProbability::default(),
             target_acceptance: None,
             tuning: None,
             defect: None,
@@ -114,14 +139,20 @@ impl ManifoldPerturbationSettings {
             && w.epsilon > 0.0
             && w.epsilon < 1.0
             && self.target_acceptance.is_none_or(|a| a > 0.0 && a < 1.0)
+            && self.specular.is_valid()
         {
             Ok(())
         } else {
             Err(crate::Error::InvalidParameter {
                 name: "manifold perturbation".into(),
                 reason: format!(
-                    "need λ > 0, at least one walk iteration, 0 < ε < 1 and a target acceptance in (0, 1); got λ = {}, N = {}, ε = {}, target {:?}",
-                    self.lambda, w.max_iterations, w.epsilon, self.target_acceptance
+                    "need λ > 0, at least one walk iteration, 0 < ε < 1, a target acceptance in (0, 1), a quantile q in (0, 1) and 0 ≤ Δθ ≤ π; got λ = {}, N = {}, ε = {}, target {:?}, q = {}, Δθ = {}",
+                    self.lambda,
+                    w.max_iterations,
+                    w.epsilon,
+                    self.target_acceptance,
+                    self.specular.quantile,
+                    self.specular.normal_change
                 ),
             })
         }
@@ -156,7 +187,7 @@ pub enum Toward {
 pub struct Strategy {
     /// Where the direction turns (or the endpoint that moves, for a position move).
     pub a: usize,
-    /// The non-specular vertex the first chain reaches (`a` itself for a position move).
+    /// The free vertex the first chain reaches (`a` itself for a position move).
     pub b: usize,
     /// The kept end of the second chain.
     pub c: usize,
@@ -182,6 +213,7 @@ impl Strategy {
                     l: -1,
                     m: hi,
                     added: hi,
+                    pivot: self.b,
                 };
             }
             // The lens point moves: nothing kept after x_c.
@@ -190,6 +222,7 @@ impl Strategy {
                     l: lo as isize,
                     m: k + 1,
                     added: k - lo,
+                    pivot: self.b,
                 };
             }
             _ => {}
@@ -198,6 +231,7 @@ impl Strategy {
             l: lo as isize,
             m: hi,
             added: hi - lo - 1,
+            pivot: self.b,
         }
     }
 }
@@ -241,9 +275,137 @@ impl<'a> ManifoldPerturbation<'a> {
         self.stats.lock().map(|s| *s).unwrap_or_default()
     }
 
-    /// The strategies this direction can use on `x`.
+    /// The strategies this direction can use on `x` with every glossy vertex free (the candidates
+    /// for `x_a`; [`ManifoldPerturbation::classify`] then draws which glossy vertices join chains).
     pub fn strategies(&self, x: &PathState) -> Vec<Strategy> {
         strategies(self.scene, &x.path, self.toward)
+    }
+
+    /// `ψ` of vertex `i` of `path`: 1 for ideal specular vertices, 0 at the endpoints and diffuse
+    /// vertices, eq. 28 for glossy ones.
+    pub fn specular_probability(&self, path: &super::FullPath, i: usize) -> f64 {
+        if i == 0 || i >= path.edges() {
+            return 0.0;
+        }
+        let v = &path.vertices[i];
+        if v.delta {
+            return 1.0;
+        }
+        v.bsdf
+            .as_ref()
+            .map_or(0.0, |b| self.settings.specular.of_bsdf(b))
+    }
+
+    /// The first vertex after `from` (in this direction) that the classification leaves free.
+    fn next_free(&self, path: &super::FullPath, from: usize, rng: &mut ChainRng) -> Option<usize> {
+        let k = path.edges();
+        let mut i = from;
+        loop {
+            i = match self.toward {
+                Toward::Light => i.checked_sub(1)?,
+                Toward::Eye => Some(i + 1).filter(|&j| j <= k)?,
+            };
+            let psi = self.specular_probability(path, i);
+            if psi >= 1.0 {
+                continue;
+            }
+            if psi <= 0.0 || uniform(rng) >= psi {
+                return Some(i);
+            }
+        }
+    }
+
+    /// The strategy from candidate `candidate`'s `x_a` (or position move) once the vertices after
+    /// it are classified (§5.2): `None` when the classification leaves no valid strategy.
+    pub fn classify(
+        &self,
+        path: &super::FullPath,
+        candidate: &Strategy,
+        rng: &mut ChainRng,
+    ) -> Option<Strategy> {
+        let a = candidate.a;
+        let b = if candidate.position {
+            a
+        } else {
+            self.next_free(path, a, rng)?
+        };
+        let c = self.next_free(path, b, rng)?;
+        let s = Strategy {
+            a,
+            b,
+            c,
+            position: candidate.position,
+        };
+        valid(self.scene, path, &s).then_some(s)
+    }
+
+    /// `ln` of the probability that the classification of `path` produces `s`:
+    /// `Π ψ(x_i) (1 − ψ(x_b)) (1 − ψ(x_c))` over the chains' vertices (eq. 12).
+    pub fn ln_classification(&self, path: &super::FullPath, s: &Strategy) -> f64 {
+        let (lo, hi) = s.ends();
+        let mut p = 1.0 - self.specular_probability(path, s.c);
+        for i in lo + 1..hi {
+            let psi = self.specular_probability(path, i);
+            p *= if i == s.b { 1.0 - psi } else { psi };
+        }
+        if p > 0.0 { p.ln() } else { f64::NEG_INFINITY }
+    }
+
+    /// The strategy a record of this direction names on a path of `k` edges.
+    fn strategy_of(&self, change: Change, k: usize) -> Option<Strategy> {
+        let s = if change.l < 0 {
+            (self.toward == Toward::Eye).then_some(Strategy {
+                a: 0,
+                b: 0,
+                c: change.m,
+                position: true,
+            })?
+        } else if change.m == k + 1 {
+            (self.toward == Toward::Light).then_some(Strategy {
+                a: k,
+                b: k,
+                c: change.l as usize,
+                position: true,
+            })?
+        } else {
+            let (lo, hi) = (change.l as usize, change.m);
+            let (a, c) = match self.toward {
+                Toward::Light => (hi, lo),
+                Toward::Eye => (lo, hi),
+            };
+            let b = change.pivot;
+            if !(lo < b && b < hi) {
+                return None;
+            }
+            Strategy {
+                a,
+                b,
+                c,
+                position: false,
+            }
+        };
+        (s.change() == change).then_some(s)
+    }
+
+    /// Follow the direction arriving at the glossy vertex `v` (traced as vertex `i` of the first
+    /// chain) about the microfacet normal that `x̄`'s vertex `i` has in its shading frame: the
+    /// direction leaving it.
+    fn follow_offset(&self, v: &mut Vertex, x: &super::FullPath, i: usize) -> Result<DVec3, Failure> {
+        let want = chain_vertex(self.scene, x, i, true).ok_or(Failure::Failed)?;
+        let here = ChainVertex {
+            point: v.point,
+            material: self.scene.primitive_material[v.point.primitive as usize],
+            ..want
+        };
+        if here.material != want.material {
+            return Err(Failure::Failed);
+        }
+        let h = here.half_vector(v.wo).ok_or(Failure::Failed)?;
+        let eta = here.relative_eta(v.wo);
+        let refract = matches!(here.interaction, Interaction::Refract { .. });
+        let wo = scatter(v.wo, h, eta, refract, v.point.n).ok_or(Failure::Failed)?;
+        v.delta = false;
+        Ok(wo)
     }
 
     /// The sampling density `p(ω_i → ω_o)` at vertex `a` of `path` of leaving toward `w`: the
@@ -308,26 +470,59 @@ impl<'a> ManifoldPerturbation<'a> {
         {
             return never;
         }
+        // The classification, and the glossy vertices of the chains: they scatter alike and keep
+        // their offsets (a symmetric check; the walk meets its target to ε, the offsets to ~1e-6).
+        let classification = self.ln_classification(xp, s);
+        if classification == never {
+            return never;
+        }
+        let (lo, hi) = s.ends();
+        for i in (lo + 1..hi).filter(|&i| i != s.b && !xp.specular(i)) {
+            let same = match (
+                chain_vertex(self.scene, xp, i, true),
+                chain_vertex(self.scene, yp, i, true),
+            ) {
+                (Some(u), Some(v)) => {
+                    u.interaction == v.interaction
+                        && (u.offset[0] - v.offset[0]).hypot(u.offset[1] - v.offset[1]) < 1e-3
+                }
+                _ => false,
+            };
+            if !same {
+                return never;
+            }
+        }
+        let det = match self.settings.defect {
+            Some(ManifoldDefect::GlossyDeterminant) => Some(1.0),
+            _ => glossy_determinant(self.scene, yp, s),
+        };
+        let Some(det) = det else {
+            return never;
+        };
+        let chains = classification - det.ln();
         if s.position {
-            return self.ln_position_density(x, y, s, count);
+            return self.ln_position_density(x, y, s, count) + chains;
         }
         let Some(d) = self.distribution(xp, s) else {
             return never;
         };
         let yv = &yp.vertices;
         let w = direction(&yv[s.a], &yv[self.step(s.a)]);
-        let density = d.pdf(w);
+        let density = match self.settings.defect {
+            Some(ManifoldDefect::VmfNormaliser) if d.kappa > 0.0 => d.pdf(w) / d.kappa,
+            _ => d.pdf(w),
+        };
         let cos_a = endpoint_cos(self.scene, &yv[s.a], w);
         let g_a = match self.settings.defect {
             Some(ManifoldDefect::FirstChainGeometry) => 1.0,
-            None => chain_geometry(self.scene, yp, s.a, s.b, s.a),
+            _ => chain_geometry(self.scene, yp, s.a, s.b, s.a),
         };
         let f = contribution(self.scene, yp, s);
         let i = f.map_or(0.0, |f| self.importance.of(f));
         if !(density > 0.0 && cos_a > 0.0 && g_a > 0.0 && i > 0.0) {
             return never;
         }
-        let ln = density.ln() - cos_a.ln() + g_a.ln() - i.ln() - (count as f64).ln();
+        let ln = density.ln() - cos_a.ln() + g_a.ln() - i.ln() - (count as f64).ln() + chains;
         if ln.is_nan() { never } else { ln }
     }
 
@@ -390,7 +585,7 @@ impl<'a> ManifoldPerturbation<'a> {
         let xp = &x.path;
         let xa = &xp.vertices[s.a];
         let sigma = self.position_sigma(xa).ok_or(Failure::NotApplicable)?;
-        let (e1, e2) = chain_vertex(scene, xp, s.a)
+        let (e1, e2) = chain_vertex(scene, xp, s.a, false)
             .ok_or(Failure::Failed)?
             .tangent_basis();
         let gauss = |rng: &mut ChainRng| {
@@ -466,10 +661,10 @@ impl<'a> ManifoldPerturbation<'a> {
         if second.is_empty() {
             return Ok(Vec::new());
         }
-        let chain: Option<Vec<ChainVertex>> = std::iter::once(c)
-            .chain(second.iter().copied())
-            .chain(std::iter::once(b))
-            .map(|i| chain_vertex(scene, path, i))
+        let chain: Option<Vec<ChainVertex>> = std::iter::once((c, false))
+            .chain(second.iter().map(|&i| (i, true)))
+            .chain(std::iter::once((b, false)))
+            .map(|(i, specular)| chain_vertex(scene, path, i, specular))
             .collect();
         let chain = chain.ok_or(Failure::Failed)?;
         let material = if target.primitive == u32::MAX {
@@ -484,6 +679,11 @@ impl<'a> ManifoldPerturbation<'a> {
             offset: [0.0; 2],
         };
         let walked = match self.stats.lock() {
+            Ok(mut stats) if self.settings.defect == Some(ManifoldDefect::SkipReverseWalk) => {
+                let forward = walk_manifold(scene, &chain, &target, &self.settings.walk);
+                stats.record(chain.len() - 2, &forward);
+                forward.ok()
+            }
             Ok(mut stats) => {
                 walk_reversibly(scene, &chain, &target, &self.settings.walk, &mut stats)
             }
@@ -493,13 +693,14 @@ impl<'a> ManifoldPerturbation<'a> {
         let m = forward.chain.len();
         Ok(forward.chain[1..m - 1]
             .iter()
-            .map(|cv| Vertex {
+            .zip(second)
+            .map(|(cv, &i)| Vertex {
                 kind: VertexKind::Surface,
                 bsdf: scene.bsdf(&cv.point).ok(),
                 point: cv.point,
                 wo: DVec3::ZERO,
                 beta: Rgb::BLACK,
-                delta: true,
+                delta: path.specular(i),
                 pdf_fwd: 0.0,
                 pdf_rev: 0.0,
             })
@@ -527,7 +728,7 @@ pub fn position_contribution(scene: &Scene, path: &super::FullPath, s: &Strategy
         let w = direction(&v[hi], &v[hi - 1]);
         light_side(scene, path, lo)? * scene.camera.importance(v[hi].p(), w).0
     };
-    let mut f = ends * chain_geometry(scene, path, lo, hi, hi);
+    let mut f = ends * segments_geometry(scene, path, lo, hi);
     for i in lo + 1..hi {
         f *= vertex_factor(scene, path, i);
     }
@@ -572,10 +773,11 @@ fn camera_side(scene: &Scene, path: &super::FullPath, hi: usize) -> Option<Rgb> 
     Some(sub[j].beta * vertex_factor(scene, path, hi))
 }
 
-/// The strategies running `toward` on `path`: every non-specular `x_a` from which the first
-/// non-specular vertex `x_b` is a scattering surface and a second one `x_c` exists, excluding
-/// chains that start at a point light; and the position move of the endpoint on this direction's
-/// side (the lens toward the light when it has an aperture, an area light toward the eye).
+/// The strategies running `toward` on `path` with every glossy vertex free (the candidates for
+/// `x_a`): every non-delta `x_a` from which the next non-delta vertex `x_b` is a scattering surface
+/// and a further one `x_c` exists, excluding chains that start at a point light; and the position
+/// move of the endpoint on this direction's side (the lens toward the light when it has an
+/// aperture, an area light toward the eye).
 pub fn strategies(scene: &Scene, path: &super::FullPath, toward: Toward) -> Vec<Strategy> {
     let k = path.edges();
     let mut out = Vec::new();
@@ -595,10 +797,6 @@ pub fn strategies(scene: &Scene, path: &super::FullPath, toward: Toward) -> Vec<
             }
         }
     };
-    let point_light = matches!(
-        v[0].kind,
-        VertexKind::Light { light } if scene.lights[light as usize].is_delta_position()
-    );
     for a in 0..=k {
         if path.specular(a) {
             continue;
@@ -606,9 +804,6 @@ pub fn strategies(scene: &Scene, path: &super::FullPath, toward: Toward) -> Vec<
         let Some(b) = next_non_specular(a) else {
             continue;
         };
-        if b == 0 || b == k || !scatters_diffusely(&v[b]) {
-            continue;
-        }
         let Some(c) = next_non_specular(b) else {
             continue;
         };
@@ -618,13 +813,9 @@ pub fn strategies(scene: &Scene, path: &super::FullPath, toward: Toward) -> Vec<
             c,
             position: false,
         };
-        let (lo, hi) = s.ends();
-        // A specular chain between a point light and x_b.
-        let starts_at_point_light = point_light && lo == 0 && b > 1;
-        if starts_at_point_light || hi - lo < 2 {
-            continue;
+        if valid(scene, path, &s) {
+            out.push(s);
         }
-        out.push(s);
     }
     // Position moves of a thin lens's point, toward the light.
     if toward == Toward::Light
@@ -657,6 +848,26 @@ pub fn strategies(scene: &Scene, path: &super::FullPath, toward: Toward) -> Vec<
     out
 }
 
+/// Whether `s` is a strategy on `path`: a direction move's `x_b` is a scattering surface (not an
+/// endpoint) and no chain starts at a point light.
+fn valid(scene: &Scene, path: &super::FullPath, s: &Strategy) -> bool {
+    let k = path.edges();
+    let v = &path.vertices;
+    if s.position {
+        return s.c != s.a;
+    }
+    if s.b == 0 || s.b == k || !scatters_diffusely(&v[s.b]) {
+        return false;
+    }
+    let point_light = matches!(
+        v[0].kind,
+        VertexKind::Light { light } if scene.lights[light as usize].is_delta_position()
+    );
+    // A specular chain between a point light and x_b.
+    let (lo, _) = s.ends();
+    !(point_light && lo == 0 && s.b > 1)
+}
+
 /// `|cos|` between `w` and the surface of `v` as the path's geometry terms use it: the geometric
 /// normal of a surface or an area light, the camera's viewing direction at the lens, 1 at a point
 /// light.
@@ -668,8 +879,17 @@ fn endpoint_cos(scene: &Scene, v: &Vertex, w: DVec3) -> f64 {
     }
 }
 
-/// The chain vertex of path vertex `i` (its interaction read from the path).
-fn chain_vertex(scene: &Scene, path: &super::FullPath, i: usize) -> Option<ChainVertex> {
+/// The chain vertex of path vertex `i`. As a chain's end (`specular` false) it only carries its
+/// point and material. Inside a chain it carries its interaction (reflection or refraction, read
+/// from the path) and its offset: 0 at an ideal specular vertex, at a glossy one its microfacet
+/// normal — the normalised generalised half vector of its two path neighbours — in its shading
+/// frame (eq. 11).
+fn chain_vertex(
+    scene: &Scene,
+    path: &super::FullPath,
+    i: usize,
+    specular: bool,
+) -> Option<ChainVertex> {
     let v = &path.vertices[i];
     let material = match v.kind {
         VertexKind::Camera => NO_MATERIAL,
@@ -679,19 +899,81 @@ fn chain_vertex(scene: &Scene, path: &super::FullPath, i: usize) -> Option<Chain
         },
         VertexKind::Surface => scene.primitive_material[v.point.primitive as usize],
     };
-    let interaction = if path.specular(i) && refracts(path, i) {
-        Interaction::Refract {
-            eta: v.bsdf.as_ref()?.eta()?,
-        }
-    } else {
-        Interaction::Reflect
-    };
-    Some(ChainVertex {
+    let mut cv = ChainVertex {
         point: v.point,
         material,
-        interaction,
+        interaction: Interaction::Reflect,
         offset: [0.0; 2],
-    })
+    };
+    if !specular {
+        return Some(cv);
+    }
+    if refracts(path, i) {
+        cv.interaction = Interaction::Refract {
+            eta: v.bsdf.as_ref()?.eta()?,
+        };
+    }
+    if !path.specular(i) {
+        let o = constraint(path.vertices[i - 1].p(), &cv, path.vertices[i + 1].p())?;
+        cv.offset = [o[0], o[1]];
+    }
+    Some(cv)
+}
+
+/// eq. 12's change of variables at `path` for strategy `s`: `|det ∂[x_b, x_g…]/∂[x_b, o_g…]|`
+/// over the glossy vertices `x_g` of its chains (1 when there are none). The constraint
+/// Jacobian over the vertices strictly between the ends, `x_b`'s rows replaced by the identity
+/// (`x_b` is an end for a position move), is inverted; the rows and columns of the non-delta
+/// vertices are kept. `None` when it is singular.
+pub fn glossy_determinant(scene: &Scene, path: &super::FullPath, s: &Strategy) -> Option<f64> {
+    let (lo, hi) = s.ends();
+    if (lo + 1..hi).all(|i| i == s.b || path.specular(i)) {
+        return Some(1.0);
+    }
+    let chain = (lo..=hi)
+        .map(|i| chain_vertex(scene, path, i, i != lo && i != hi && i != s.b))
+        .collect::<Option<Vec<_>>>()?;
+    let n = chain.len();
+    let m = n - 2;
+    let j = chain_jacobian(&chain, chain[0].tangent_basis(), chain[n - 1].tangent_basis())?;
+    let mut a = nalgebra::DMatrix::<f64>::zeros(2 * m, 2 * m);
+    for r in 0..m {
+        if lo + 1 + r == s.b {
+            a[(2 * r, 2 * r)] = 1.0;
+            a[(2 * r + 1, 2 * r + 1)] = 1.0;
+            continue;
+        }
+        let mut put = |col: usize, block: &crate::manifold::Mat2| {
+            a.fixed_view_mut::<2, 2>(2 * r, 2 * col).copy_from(block);
+        };
+        put(r, &j.a.diagonal[r]);
+        if r > 0 {
+            put(r - 1, &j.a.lower[r]);
+        }
+        if r + 1 < m {
+            put(r + 1, &j.a.upper[r]);
+        }
+    }
+    let inverse = a.try_inverse()?;
+    let keep: Vec<usize> = (0..m).filter(|&r| !path.specular(lo + 1 + r)).collect();
+    let size = 2 * keep.len();
+    let sub = nalgebra::DMatrix::from_fn(size, size, |r, c| {
+        inverse[(2 * keep[r / 2] + r % 2, 2 * keep[c / 2] + c % 2)]
+    });
+    let d = sub.determinant().abs();
+    (d > 0.0 && d.is_finite()).then_some(d)
+}
+
+/// The product of the generalised geometry terms of `path` between consecutive non-delta vertices
+/// from `lo` to `hi`, each seen from its camera end (the convention of radiance-mode deltas,
+/// module docs).
+fn segments_geometry(scene: &Scene, path: &super::FullPath, lo: usize, hi: usize) -> f64 {
+    let free: Vec<usize> = (lo..=hi)
+        .filter(|&i| i == lo || i == hi || !path.specular(i))
+        .collect();
+    free.windows(2)
+        .map(|w| chain_geometry(scene, path, w[0], w[1], w[1]))
+        .product()
 }
 
 /// The generalised geometry term of `path` between the non-specular vertices `from` and `to`
@@ -706,7 +988,7 @@ fn chain_geometry(
 ) -> f64 {
     let (lo, hi) = (from.min(to), from.max(to));
     let Some(chain) = (lo..=hi)
-        .map(|i| chain_vertex(scene, path, i))
+        .map(|i| chain_vertex(scene, path, i, i != lo && i != hi))
         .collect::<Option<Vec<_>>>()
     else {
         return 0.0;
@@ -751,12 +1033,11 @@ pub fn contribution(scene: &Scene, path: &super::FullPath, s: &Strategy) -> Opti
     let a_lo = light_side(scene, path, lo)?;
     // A_hi: the camera side down to x_hi, with x_hi's factor.
     let a_hi = camera_side(scene, path, hi)?;
-    let mut f = a_lo * a_hi * vertex_factor(scene, path, s.b);
-    for i in (lo + 1..hi).filter(|&i| i != s.b) {
+    let mut f = a_lo * a_hi;
+    for i in lo + 1..hi {
         f *= vertex_factor(scene, path, i);
     }
-    let g = chain_geometry(scene, path, lo, s.b, s.b) * chain_geometry(scene, path, s.b, hi, hi);
-    let f = f * g;
+    let f = f * segments_geometry(scene, path, lo, hi);
     (f.is_finite() && !f.is_black()).then_some(f)
 }
 
@@ -779,7 +1060,9 @@ impl Mutation for ManifoldPerturbation<'_> {
             return Err(Failure::NotApplicable);
         }
         let pick = ((uniform(rng) * list.len() as f64) as usize).min(list.len() - 1);
-        let s = list[pick];
+        let s = self
+            .classify(&x.path, &list[pick], rng)
+            .ok_or(Failure::Failed)?;
         if s.position {
             return self.propose_position(x, &s, rng, y);
         }
@@ -800,8 +1083,10 @@ impl Mutation for ManifoldPerturbation<'_> {
                 if !scatters_diffusely(&v) {
                     return Err(Failure::Failed);
                 }
-            } else {
+            } else if xp.specular(i) {
                 w = follow_specular(&mut v, xp, i, mode)?;
+            } else {
+                w = self.follow_offset(&mut v, xp, i)?;
             }
             first.push(v);
         }
@@ -828,10 +1113,11 @@ impl Mutation for ManifoldPerturbation<'_> {
 
     fn ln_density(&self, x: &PathState, y: &PathState, change: Change) -> f64 {
         let list = self.strategies(x);
-        list.iter()
-            .find(|s| s.change() == change)
-            .map_or(f64::NEG_INFINITY, |s| {
-                self.ln_density_of(x, y, s, list.len())
-            })
+        match self.strategy_of(change, x.path.edges()) {
+            Some(s) if list.iter().any(|c| c.a == s.a && c.position == s.position) => {
+                self.ln_density_of(x, y, &s, list.len())
+            }
+            _ => f64::NEG_INFINITY,
+        }
     }
 }

@@ -37,6 +37,10 @@ pub struct Change {
     pub m: usize,
     /// New vertices.
     pub added: usize,
+    /// The vertex `x_b` whose position (and glossy offset) a manifold perturbation moved freely
+    /// — the one that tells its strategies apart when glossy vertices on offset manifolds lie
+    /// between its ends (Jakob & Marschner 2012, §5.2); 0 for every other move.
+    pub pivot: usize,
 }
 
 impl Change {
@@ -51,6 +55,7 @@ impl Change {
             l: self.l,
             m: (self.l + 1) as usize + self.added,
             added: self.removed(),
+            pivot: self.pivot,
         }
     }
 
@@ -211,16 +216,19 @@ mod tests {
                 l: -1,
                 m: 4,
                 added: 5,
+                pivot: 0,
             },
             Change {
                 l: 1,
                 m: 3,
                 added: 0,
+                pivot: 0,
             },
             Change {
                 l: 0,
                 m: 2,
                 added: 3,
+                pivot: 0,
             },
         ] {
             assert_eq!(c.reverse().reverse(), c);

@@ -135,6 +135,7 @@ impl Mutation for NewPathMutation<'_> {
             l: -1,
             m: x.path.edges() + 1,
             added: k + 1,
+            pivot: 0,
         });
         Ok(())
     }
@@ -144,6 +145,7 @@ impl Mutation for NewPathMutation<'_> {
             l: -1,
             m: x.path.edges() + 1,
             added: y.path.edges() + 1,
+            pivot: 0,
         };
         if c != whole {
             return f64::NEG_INFINITY;

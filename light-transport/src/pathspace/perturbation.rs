@@ -209,6 +209,7 @@ impl CameraChain {
             l: self.s as isize - 1,
             m: k,
             added: k - self.s,
+            pivot: 0,
         }
     }
 }
