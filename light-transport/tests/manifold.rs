@@ -70,7 +70,10 @@ fn random_chain(rng: &mut ChainRng, m: usize, offsets: bool) -> Vec<ChainVertex>
                 material: 0,
                 interaction,
                 offset: if offsets {
-                    let (r, phi) = (0.5 * uniform(rng).sqrt(), std::f64::consts::TAU * uniform(rng));
+                    let (r, phi) = (
+                        0.5 * uniform(rng).sqrt(),
+                        std::f64::consts::TAU * uniform(rng),
+                    );
                     [r * phi.cos(), r * phi.sin()]
                 } else {
                     [0.0, 0.0]

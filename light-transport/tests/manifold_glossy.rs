@@ -304,20 +304,30 @@ fn transition(from: &[DVec3], to: &[DVec3], m: Move) -> f64 {
     let s = scene();
     let p = psi();
     let choose = 1.0 / 3.0;
-    let vmf = |mean: DVec3, w: DVec3, pdf: f64, cos: f64| {
-        vmf_pdf(LAMBDA * LAMBDA * pdf, mean, w) / cos
-    };
+    let vmf =
+        |mean: DVec3, w: DVec3, pdf: f64, cos: f64| vmf_pdf(LAMBDA * LAMBDA * pdf, mean, w) / cos;
     let gauss = |var: f64, a: DVec3, b: DVec3| {
         (-(b - a).length_squared() / (2.0 * var)).exp() / (TAU * var)
     };
     let cam_cos = |w: DVec3| s.camera.forward().dot(w).abs();
     match m {
         Move::LensPosition => {
-            choose * gauss(LENS_RADIUS * LENS_RADIUS / (2.0 * LAMBDA * LAMBDA), from[3], to[3])
+            choose
+                * gauss(
+                    LENS_RADIUS * LENS_RADIUS / (2.0 * LAMBDA * LAMBDA),
+                    from[3],
+                    to[3],
+                )
         }
         Move::LightPosition { walked } => {
             let class = if walked { p } else { 1.0 - p };
-            choose * class * gauss(LIGHT_TRIANGLE_AREA / (TAU * LAMBDA * LAMBDA), from[0], to[0])
+            choose
+                * class
+                * gauss(
+                    LIGHT_TRIANGLE_AREA / (TAU * LAMBDA * LAMBDA),
+                    from[0],
+                    to[0],
+                )
         }
         Move::LensDirection { walked } => {
             let class = if walked { p } else { 1.0 - p };
@@ -354,9 +364,7 @@ fn transition(from: &[DVec3], to: &[DVec3], m: Move) -> f64 {
             let bsdf = s.bsdf(&point).expect("metal");
             let (wx, wy) = (dir(from[1], from[2]), dir(to[1], to[2]));
             let pdf = bsdf.pdf(dir(from[1], from[0]), wx);
-            choose
-                * vmf(wx, wy, pdf, wy.x.abs())
-                * geometry(to[1], wy.x.abs(), to[2], DVec3::Y)
+            choose * vmf(wx, wy, pdf, wy.x.abs()) * geometry(to[1], wy.x.abs(), to[2], DVec3::Y)
         }
     }
 }
@@ -423,7 +431,10 @@ fn compare(defect: Option<ManifoldDefect>) -> (f64, Vec<(Move, usize)>) {
 #[test]
 fn reported_ratios_match_the_independent_densities() {
     let (worst, seen) = compare(None);
-    println!("ψ = {:.3}; moves compared: {seen:?}; worst |Δ ln ratio| {worst:.2e}", psi());
+    println!(
+        "ψ = {:.3}; moves compared: {seen:?}; worst |Δ ln ratio| {worst:.2e}",
+        psi()
+    );
     assert_eq!(seen.len(), 9, "every strategy and classification seen");
     assert!(seen.iter().all(|(_, n)| *n >= 20), "{seen:?}");
     assert!(worst < 1e-5, "ratios differ by {worst}");
@@ -513,6 +524,9 @@ fn the_sampler_draws_from_the_reported_density_on_glossy_chains() {
         let (z, z_broken, hits) = numerical(name, m, watched, n, 900 + k as u64);
         assert!(hits >= 500, "{name} {m:?}: only {hits} hits");
         assert!(z.abs() < Z_LIMIT, "{name} {m:?}: z = {z}");
-        assert!(z_broken.abs() >= Z_LIMIT, "{name} {m:?}: the broken density passes");
+        assert!(
+            z_broken.abs() >= Z_LIMIT,
+            "{name} {m:?}: the broken density passes"
+        );
     }
 }

@@ -144,9 +144,9 @@ impl PathSpaceArgs {
             specular: SpecularProbability {
                 glossy: self.manifold_glossy,
                 quantile: self.specular_quantile,
-                normal_change: self.normal_change.unwrap_or(
-                    SpecularProbability::default().normal_change,
-                ),
+                normal_change: self
+                    .normal_change
+                    .unwrap_or(SpecularProbability::default().normal_change),
             },
             target_acceptance: self.lambda_target,
             tuning: None,

@@ -390,7 +390,12 @@ impl<'a> ManifoldPerturbation<'a> {
     /// Follow the direction arriving at the glossy vertex `v` (traced as vertex `i` of the first
     /// chain) about the microfacet normal that `x̄`'s vertex `i` has in its shading frame: the
     /// direction leaving it.
-    fn follow_offset(&self, v: &mut Vertex, x: &super::FullPath, i: usize) -> Result<DVec3, Failure> {
+    fn follow_offset(
+        &self,
+        v: &mut Vertex,
+        x: &super::FullPath,
+        i: usize,
+    ) -> Result<DVec3, Failure> {
         let want = chain_vertex(self.scene, x, i, true).ok_or(Failure::Failed)?;
         let here = ChainVertex {
             point: v.point,
@@ -935,7 +940,11 @@ pub fn glossy_determinant(scene: &Scene, path: &super::FullPath, s: &Strategy) -
         .collect::<Option<Vec<_>>>()?;
     let n = chain.len();
     let m = n - 2;
-    let j = chain_jacobian(&chain, chain[0].tangent_basis(), chain[n - 1].tangent_basis())?;
+    let j = chain_jacobian(
+        &chain,
+        chain[0].tangent_basis(),
+        chain[n - 1].tangent_basis(),
+    )?;
     let mut a = nalgebra::DMatrix::<f64>::zeros(2 * m, 2 * m);
     for r in 0..m {
         if lo + 1 + r == s.b {
