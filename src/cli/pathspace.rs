@@ -110,10 +110,9 @@ pub struct PathSpaceArgs {
     #[arg(long, default_value_t = 0.9)]
     pub specular_quantile: f64,
     /// ψ: Δθ, the expected change (radians) of a free glossy vertex's microfacet normal in one
-    /// perturbation. Default: measured by a pilot of the manifold perturbation in the warm-up
-    /// (memlt, mept, mlt with manifold moves), 0.05 where there is none (cmlt).
-    #[arg(long)]
-    pub normal_change: Option<f64>,
+    /// perturbation (the paper measures it in a short pilot run; here it is given).
+    #[arg(long, default_value_t = 0.05)]
+    pub normal_change: f64,
     /// ERPT: mutations per chain.
     #[arg(long, default_value_t = 100)]
     pub erpt_chain_length: u64,
@@ -144,9 +143,7 @@ impl PathSpaceArgs {
             specular: SpecularProbability {
                 glossy: self.manifold_glossy,
                 quantile: self.specular_quantile,
-                normal_change: self
-                    .normal_change
-                    .unwrap_or(SpecularProbability::default().normal_change),
+                normal_change: self.normal_change,
             },
             target_acceptance: self.lambda_target,
             tuning: None,

@@ -23,8 +23,8 @@ pub struct SpecularProbability {
     /// The quantile `q` of the microfacet normals' angle (0.9).
     pub quantile: f64,
     /// `Δθ` in radians, the expected change of a free vertex's microfacet normal in a
-    /// perturbation (measured by a pilot in the warm-up of `mlt`/`memlt` and `mept` unless given;
-    /// 0.05 until then).
+    /// perturbation (0.05). The paper measures it in a short pilot run before rendering; here it
+    /// is a setting (`--normal-change`).
     pub normal_change: f64,
 }
 
