@@ -530,3 +530,32 @@ fn the_sampler_draws_from_the_reported_density_on_glossy_chains() {
         );
     }
 }
+
+/// The pilot of `Δθ` (appendix A1) from the glossy path: it measures the wall's microfacet normal
+/// turning in proposals that leave it free, more for larger steps (smaller λ); on a path without
+/// glossy vertices there is nothing to measure.
+#[test]
+fn the_pilot_measures_the_normal_change() {
+    use light_transport::pathspace::normal_change::measure_normal_change;
+    let x = path();
+    let mut m = Mutations::new(4);
+    let at = |m: &Mutations| {
+        measure_normal_change(scene(), m, std::slice::from_ref(&x), 3)
+            .expect("pilot")
+            .expect("glossy normals changed")
+    };
+    let fine = at(&m);
+    m.manifold.lambda = 5.0;
+    let coarse = at(&m);
+    println!("λ = 50: {fine}; λ = 5: {coarse}");
+    assert!(fine.delta_theta > 0.0 && fine.samples >= 10);
+    assert!(coarse.delta_theta > 2.0 * fine.delta_theta);
+    // The same path with a matte wall: no glossy vertex.
+    let mut matte = x.clone();
+    matte.path.vertices[1].bsdf = matte.path.vertices[2].bsdf.clone();
+    assert!(
+        measure_normal_change(scene(), &m, std::slice::from_ref(&matte), 3)
+            .expect("pilot")
+            .is_none()
+    );
+}

@@ -110,9 +110,10 @@ pub struct PathSpaceArgs {
     #[arg(long, default_value_t = 0.9)]
     pub specular_quantile: f64,
     /// ψ: Δθ, the expected change (radians) of a free glossy vertex's microfacet normal in one
-    /// perturbation (the paper measures it in a short pilot run; here it is given).
-    #[arg(long, default_value_t = 0.05)]
-    pub normal_change: f64,
+    /// perturbation. Default: measured by a pilot before rendering (memlt, mlt and mept with
+    /// manifold moves), as the paper does; 0.05 where no pilot runs (cmlt).
+    #[arg(long)]
+    pub normal_change: Option<f64>,
     /// ERPT: mutations per chain.
     #[arg(long, default_value_t = 100)]
     pub erpt_chain_length: u64,
@@ -147,6 +148,7 @@ impl PathSpaceArgs {
             },
             target_acceptance: self.lambda_target,
             tuning: None,
+            pilot: None,
             defect: None,
         }
     }

@@ -23,17 +23,21 @@ pub struct SpecularProbability {
     /// The quantile `q` of the microfacet normals' angle (0.9).
     pub quantile: f64,
     /// `Δθ` in radians, the expected change of a free vertex's microfacet normal in a
-    /// perturbation (0.05). The paper measures it in a short pilot run before rendering; here it
-    /// is a setting (`--normal-change`).
-    pub normal_change: f64,
+    /// perturbation; `None`: measured by a pilot before rendering, as the paper does
+    /// ([`crate::pathspace::normal_change`]; MEMLT, path-space MLT and MEPT run it), and
+    /// [`DEFAULT_NORMAL_CHANGE`] where no pilot runs (CMLT).
+    pub normal_change: Option<f64>,
 }
+
+/// `Δθ` where it is neither given nor measured (radians).
+pub const DEFAULT_NORMAL_CHANGE: f64 = 0.05;
 
 impl Default for SpecularProbability {
     fn default() -> Self {
         Self {
             glossy: true,
             quantile: 0.9,
-            normal_change: 0.05,
+            normal_change: None,
         }
     }
 }
@@ -43,8 +47,14 @@ impl SpecularProbability {
     pub fn is_valid(&self) -> bool {
         self.quantile > 0.0
             && self.quantile < 1.0
-            && self.normal_change >= 0.0
-            && self.normal_change <= std::f64::consts::PI
+            && self
+                .normal_change
+                .is_none_or(|d| (0.0..=std::f64::consts::PI).contains(&d))
+    }
+
+    /// `Δθ` in use: the given or measured one, else [`DEFAULT_NORMAL_CHANGE`].
+    pub fn delta_theta(&self) -> f64 {
+        self.normal_change.unwrap_or(DEFAULT_NORMAL_CHANGE)
     }
 
     /// `θ_q` of GGX roughness `alpha`.
@@ -58,7 +68,7 @@ impl SpecularProbability {
             return 0.0;
         }
         let theta = self.quantile_angle(alpha);
-        let wide = (theta + self.normal_change).min(std::f64::consts::PI);
+        let wide = (theta + self.delta_theta()).min(std::f64::consts::PI);
         let psi = (1.0 - theta.cos()) / (1.0 - wide.cos());
         if psi.is_finite() {
             psi.clamp(0.0, 1.0)
@@ -93,7 +103,7 @@ mod tests {
         // Smoother surfaces are more likely specular; Δθ = 0 makes every glossy vertex specular.
         assert!(p.of_roughness(0.01) < p.of_roughness(0.1));
         let still = SpecularProbability {
-            normal_change: 0.0,
+            normal_change: Some(0.0),
             ..p
         };
         assert_eq!(still.of_roughness(0.2), 1.0);

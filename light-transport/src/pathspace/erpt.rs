@@ -84,6 +84,21 @@ impl Erpt {
             settings.mutations.manifold.lambda = t.lambda;
             settings.mutations.manifold.tuning = Some(t);
         }
+        let specular = settings.mutations.manifold.specular;
+        if manifold > 0.0 && specular.glossy && specular.normal_change.is_none() {
+            // Δθ of ψ by a pilot on paths resampled from independent ones, before rendering.
+            let states = super::lambda_tuning::resampled_states(scene, &settings.mutations, 0)?;
+            let p = super::normal_change::measure_normal_change(
+                scene,
+                &settings.mutations,
+                &states,
+                0,
+            )?;
+            if let Some(p) = p {
+                settings.mutations.manifold.specular.normal_change = Some(p.delta_theta);
+                settings.mutations.manifold.pilot = Some(p);
+            }
+        }
         let m = &settings.mutations;
         if settings.chain_length == 0 || settings.pilot == 0 {
             return Err(Error::InvalidParameter {
@@ -142,6 +157,9 @@ impl Erpt {
         );
         if let Some(t) = &self.settings.mutations.manifold.tuning {
             out.push(format!("lambda     {t}"));
+        }
+        if let Some(p) = &self.settings.mutations.manifold.pilot {
+            out.push(format!("glossy     {p}"));
         }
         let walks = self.walk_stats();
         if walks.walks > 0 {

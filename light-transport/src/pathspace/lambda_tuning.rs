@@ -83,6 +83,14 @@ pub fn tune_lambda(
     seed: u64,
 ) -> Result<LambdaTuning> {
     let m = warm_up_mutations(mutations, target)?;
+    let states = resampled_states(scene, &m, seed)?;
+    tune_lambda_from(scene, mutations, target, &states, seed)
+}
+
+/// Up to 96 states for a warm-up or a pilot of the manifold perturbation (for integrators without
+/// a seeded population, such as MEPT): paths of every length that `m`'s mixture can move,
+/// resampled in proportion to their importance weights from independent ones.
+pub fn resampled_states(scene: &Scene, m: &Mutations, seed: u64) -> Result<Vec<PathState>> {
     let probe = m.proposal(scene, NewPath::uniform(m.max_edges))?;
     // Warm-up chains start from paths resampled in proportion to their importance weights (as
     // the driver seeds its chains), among independent paths of every length that the
@@ -116,8 +124,7 @@ pub fn tune_lambda(
             states.push(chosen.0.clone());
         }
     }
-    drop(probe);
-    tune_lambda_from(scene, mutations, target, &states, seed)
+    Ok(states)
 }
 
 /// [`tune_lambda`] from given warm-up states (e.g. a Metropolis driver's seeded chains, which

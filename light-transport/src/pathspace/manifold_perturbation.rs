@@ -96,6 +96,8 @@ pub struct ManifoldPerturbationSettings {
     pub target_acceptance: Option<f64>,
     /// How `λ` was chosen, when a warm-up tuned it ([`super::lambda_tuning`]).
     pub tuning: Option<super::lambda_tuning::LambdaTuning>,
+    /// How `Δθ` of `ψ` was measured, when a pilot did it ([`super::normal_change`]).
+    pub pilot: Option<super::normal_change::NormalChange>,
     /// A deliberate error, for showing that the tests see one (`None` outside those tests).
     #[doc(hidden)]
     pub defect: Option<ManifoldDefect>,
@@ -124,6 +126,7 @@ impl Default for ManifoldPerturbationSettings {
             specular: SpecularProbability::default(),
             target_acceptance: None,
             tuning: None,
+            pilot: None,
             defect: None,
         }
     }
@@ -152,7 +155,7 @@ impl ManifoldPerturbationSettings {
                     w.epsilon,
                     self.target_acceptance,
                     self.specular.quantile,
-                    self.specular.normal_change
+                    self.specular.delta_theta()
                 ),
             })
         }

@@ -10,6 +10,7 @@
 use super::lambda_tuning::{LambdaTuning, tune_lambda_from};
 use super::mutations::Mutations;
 use super::new_path::NewPath;
+use super::normal_change::{NormalChange, measure_normal_change};
 use super::state::PathState;
 use crate::Result;
 use crate::manifold::WalkStats;
@@ -28,6 +29,8 @@ pub struct PathMlt {
     new_path: RwLock<NewPath>,
     walks: Mutex<WalkStats>,
     tuning: RwLock<Option<LambdaTuning>>,
+    /// How the warm-up measured `Δθ` of the specular probability (glossy chains).
+    pilot: RwLock<Option<NormalChange>>,
 }
 
 impl PathMlt {
@@ -38,6 +41,7 @@ impl PathMlt {
             new_path: RwLock::new(NewPath::uniform(mutations.max_edges)),
             walks: Mutex::new(WalkStats::default()),
             tuning: RwLock::new(None),
+            pilot: RwLock::new(None),
             mutations,
         })
     }
@@ -52,12 +56,21 @@ impl PathMlt {
         self.tuning.read().map_or_else(|e| *e.into_inner(), |g| *g)
     }
 
-    /// The mutations the chains run: the settings', with `λ` as tuned.
+    /// How the warm-up measured `Δθ` (when glossy chains need it and the warm-up has run).
+    pub fn pilot(&self) -> Option<NormalChange> {
+        self.pilot.read().map_or_else(|e| *e.into_inner(), |g| *g)
+    }
+
+    /// The mutations the chains run: the settings', with `λ` as tuned and `Δθ` as measured.
     fn running(&self) -> Mutations {
         let mut m = self.mutations.clone();
         if let Some(t) = self.tuning() {
             m.manifold.lambda = t.lambda;
             m.manifold.tuning = Some(t);
+        }
+        if let Some(p) = self.pilot() {
+            m.manifold.specular.normal_change = Some(p.delta_theta);
+            m.manifold.pilot = Some(p);
         }
         m
     }
@@ -145,14 +158,27 @@ impl Method for PathMlt {
             .probability(super::manifold_perturbation::TOWARD_LIGHT.name)
             + m.probabilities
                 .probability(super::manifold_perturbation::TOWARD_EYE.name);
-        let Some(target) = m.manifold.target_acceptance.filter(|_| manifold > 0.0) else {
+        if manifold <= 0.0 {
             return Ok(());
-        };
+        }
         let states: Vec<PathState> = chains.iter().map(|c| c.state.clone()).collect();
-        let t = tune_lambda_from(scene, m, target, &states, seed)?;
-        match self.tuning.write() {
-            Ok(mut g) => *g = Some(t),
-            Err(e) => *e.into_inner() = Some(t),
+        if let Some(target) = m.manifold.target_acceptance {
+            let t = tune_lambda_from(scene, m, target, &states, seed)?;
+            match self.tuning.write() {
+                Ok(mut g) => *g = Some(t),
+                Err(e) => *e.into_inner() = Some(t),
+            }
+        }
+        // Δθ of ψ by a pilot of the perturbation as it will run (λ tuned), when glossy vertices
+        // may join chains and Δθ is not given.
+        let running = self.running();
+        let specular = running.manifold.specular;
+        if specular.glossy && specular.normal_change.is_none() {
+            let p = measure_normal_change(scene, &running, &states, seed)?;
+            match self.pilot.write() {
+                Ok(mut g) => *g = p,
+                Err(e) => *e.into_inner() = p,
+            }
         }
         Ok(())
     }
@@ -161,6 +187,9 @@ impl Method for PathMlt {
         let mut out = Vec::new();
         if let Some(t) = self.tuning() {
             out.push(format!("lambda     {t}"));
+        }
+        if let Some(p) = self.pilot() {
+            out.push(format!("glossy     {p}"));
         }
         let w = self.walk_stats();
         if w.walks > 0 {

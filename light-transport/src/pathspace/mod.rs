@@ -28,6 +28,7 @@ pub mod multi_chain;
 pub mod mutation;
 pub mod mutations;
 pub mod new_path;
+pub mod normal_change;
 pub mod path;
 pub mod perturbation;
 pub mod state;
