@@ -18,6 +18,7 @@ pub mod math;
 pub mod metropolis;
 pub mod path;
 pub mod pathspace;
+pub mod photon;
 pub mod renderer;
 pub mod sampler;
 pub mod scene;
