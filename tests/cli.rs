@@ -112,6 +112,39 @@ fn every_subcommand_runs_on_a_tiny_image() {
         &o("cmlt-replica.exr"),
     ]));
     assert!(ok && out.contains("replica exchange"), "{out}{e}");
+    // Photon mapping reports its maps; a bad setting is a clear error.
+    let (ok, out, e) = run(charted().args([
+        "render",
+        "cornell",
+        "--algo",
+        "pm",
+        "--spp",
+        "1",
+        "--resolution",
+        "24x16",
+        "--global-photons",
+        "2000",
+        "--caustic-photons",
+        "2000",
+        "-o",
+        &o("pm.exr"),
+    ]));
+    assert!(ok && out.contains("bytes per photon"), "{out}{e}");
+    let (ok, _, e) = run(charted().args([
+        "render",
+        "cornell",
+        "--algo",
+        "pm",
+        "--spp",
+        "1",
+        "--resolution",
+        "8x8",
+        "--photon-k",
+        "1",
+        "-o",
+        &o("pm-bad.exr"),
+    ]));
+    assert!(!ok && e.contains("k ≥ 2"), "{e}");
     let (ok, _, e) = run(charted().args([
         "render",
         "caustic",

@@ -46,6 +46,7 @@ pub const ALGORITHMS: &[Entry] = &[
     algos::memlt::ENTRY,
     algos::mept::ENTRY,
     algos::cmlt::ENTRY,
+    algos::pm::ENTRY,
 ];
 
 /// The algorithm called `name`.
@@ -84,6 +85,9 @@ pub struct AlgoArgs {
     /// Charted MLT options (cmlt).
     #[command(flatten)]
     pub cmlt: algos::cmlt::CmltArgs,
+    /// Photon mapping options (pm).
+    #[command(flatten)]
+    pub pm: algos::pm::PmArgs,
 }
 
 impl AlgoArgs {

@@ -8,5 +8,6 @@ pub mod memlt;
 pub mod mept;
 pub mod mlt;
 pub mod mmlt;
+pub mod pm;
 pub mod pssmlt;
 pub mod pt;

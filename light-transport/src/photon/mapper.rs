@@ -1,0 +1,353 @@
+//! Standard photon mapping with a final gather (Jensen 2001, ch. 9), storage in the convention of
+//! Fan, Chenney & Lai 2005, §3.1.
+//!
+//! Before rendering, photons are traced into a global and a caustic map ([`super::trace`]). Each
+//! pixel sample follows the camera ray through specular bounces (adding the emission it meets) to
+//! the first non-specular point `x₁`, where
+//!
+//! * **direct light** is one next-event estimate combined by MIS (power heuristic, counting the
+//!   `G` gather rays as `G` samples: weights `(n_i p_i)² / Σ_j (n_j p_j)²`) with the gather rays
+//!   that hit an emitter;
+//! * **caustics** (`L S+ x₁`) are the caustic map's estimate at `x₁`;
+//! * **indirect light** is `G` gather rays sampled from the BSDF at `x₁`: each follows specular
+//!   bounces (their emission belongs to the caustic map and is not added) to a non-specular point
+//!   `x₂`, where the global map's estimate is read. A gather direction from a delta lobe of `x₁`
+//!   continues the camera path instead.
+//!
+//! The maps' bias (their smoothing over the lookup radius) makes the render consistent, not
+//! unbiased: it approaches the converged image as the photon counts grow.
+
+use super::map::{Lookup, PhotonMap, PhotonMapError};
+use super::trace::trace_photons;
+use crate::bsdf::TransportMode;
+use crate::geometry::{Ray, offset_origin};
+use crate::integrators::{Estimator, Splat};
+use crate::light::LightKind;
+use crate::sampler::{CAMERA_STREAM, IndependentStream, SampleStream, layout};
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+use mcmc_core::rng::uniform;
+
+/// Settings of photon mapping.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotonMapping {
+    /// Light subpaths traced for the global map (200 000).
+    pub global_paths: u64,
+    /// Light subpaths traced for the caustic map (only their caustic photons are kept; 200 000).
+    pub caustic_paths: u64,
+    /// Gather rays per pixel sample (16).
+    pub gather_rays: usize,
+    /// Photons per estimate (`n = 60`, Fan et al. §6).
+    pub k: usize,
+    /// Largest lookup radius of the global map, as a fraction of the scene's bounding-sphere
+    /// radius (0.05, Mitsuba 0.6's default).
+    pub global_radius: f64,
+    /// Largest lookup radius of the caustic map, same units (0.0125).
+    pub caustic_radius: f64,
+    /// Maximum number of edges of a path (camera and photon paths).
+    pub max_edges: usize,
+    /// Seed of the photon tracing.
+    pub seed: u64,
+}
+
+impl PhotonMapping {
+    /// The defaults for paths of at most `max_edges` edges.
+    pub fn new(max_edges: usize) -> Self {
+        Self {
+            global_paths: 200_000,
+            caustic_paths: 200_000,
+            gather_rays: 16,
+            k: 60,
+            global_radius: 0.05,
+            caustic_radius: 0.0125,
+            max_edges,
+            seed: 0x9407_0A11,
+        }
+    }
+}
+
+/// Why photon mapping could not be set up.
+#[derive(Debug, thiserror::Error)]
+pub enum PhotonMappingError {
+    /// A setting out of range.
+    #[error("photon mapping: {0}")]
+    Settings(String),
+    /// A map could not be built.
+    #[error(transparent)]
+    Map(#[from] PhotonMapError),
+}
+
+/// Photon mapping on a scene: its settings and its two maps.
+#[derive(Debug)]
+pub struct PhotonMapper {
+    settings: PhotonMapping,
+    global: PhotonMap,
+    caustic: PhotonMap,
+    global_lookup: Lookup,
+    caustic_lookup: Lookup,
+}
+
+impl PhotonMapper {
+    /// Trace the photons and build the maps.
+    pub fn new(scene: &Scene, settings: PhotonMapping) -> Result<Self, PhotonMappingError> {
+        let s = &settings;
+        if s.gather_rays == 0
+            || s.k < 2
+            || s.max_edges < 1
+            || !(s.global_radius > 0.0 && s.global_radius.is_finite())
+            || !(s.caustic_radius > 0.0 && s.caustic_radius.is_finite())
+        {
+            return Err(PhotonMappingError::Settings(format!(
+                "need ≥ 1 gather ray, k ≥ 2, max depth ≥ 1 and positive finite radii; got {} gather rays, k = {}, radii {} and {}",
+                s.gather_rays, s.k, s.global_radius, s.caustic_radius
+            )));
+        }
+        let radius = 0.5 * (scene.bounds.1 - scene.bounds.0).length();
+        let (global, _) = trace_photons(scene, s.global_paths, s.max_edges, s.seed);
+        let (_, caustic) = trace_photons(scene, s.caustic_paths, s.max_edges, s.seed ^ 0xCA05);
+        Ok(Self {
+            global: PhotonMap::new(global)?,
+            caustic: PhotonMap::new(caustic)?,
+            global_lookup: Lookup::new(s.k, s.global_radius * radius),
+            caustic_lookup: Lookup::new(s.k, s.caustic_radius * radius),
+            settings,
+        })
+    }
+
+    /// Photons in the global and the caustic map.
+    pub fn photons(&self) -> (usize, usize) {
+        (self.global.len(), self.caustic.len())
+    }
+
+    /// Report lines: the maps' sizes and memory.
+    pub fn summary(&self, _: f64) -> Vec<String> {
+        let (g, c) = self.photons();
+        let b = PhotonMap::bytes_per_photon();
+        vec![format!(
+            "photons    global {g} from {} paths, caustic {c} from {} paths; {b} bytes per photon ({:.1} MB)",
+            self.settings.global_paths,
+            self.settings.caustic_paths,
+            ((g + c) * b) as f64 / 1e6
+        )]
+    }
+
+    /// Radiance arriving along `ray` (toward its origin) through specular bounces from the camera
+    /// or a delta lobe: emission met is added; at the first non-specular point, the estimate of
+    /// the module docs. `edges` counts the edges used so far.
+    fn shade(
+        &self,
+        scene: &Scene,
+        mut ray: Ray,
+        mut edges: usize,
+        rng: &mut IndependentStream,
+    ) -> Rgb {
+        let mut beta = Rgb::WHITE;
+        let mut l = Rgb::BLACK;
+        while edges < self.settings.max_edges {
+            let Some(hit) = scene.intersect(&ray) else {
+                break;
+            };
+            edges += 1;
+            let p = hit.point;
+            let wo = -ray.d;
+            if let Some((_, light)) = scene.light_at(p.primitive) {
+                l += beta * light.radiance(p.n, wo);
+            }
+            let Ok(bsdf) = scene.bsdf(&p) else { break };
+            if bsdf.is_delta_only() {
+                let (u_lobe, u) = (
+                    uniform(&mut rng.rng),
+                    [uniform(&mut rng.rng), uniform(&mut rng.rng)],
+                );
+                let Some(bs) = bsdf.sample(wo, u_lobe, u, TransportMode::Radiance) else {
+                    break;
+                };
+                if bs.pdf == 0.0 || bs.f.is_black() {
+                    break;
+                }
+                beta *= bs.f * (bs.wi.dot(p.ns).abs() / bs.pdf);
+                ray = Ray::new(offset_origin(p.p, p.n, bs.wi), bs.wi);
+                continue;
+            }
+            l += beta * self.at_diffuse(scene, &p, wo, &bsdf, edges, rng);
+            break;
+        }
+        l
+    }
+
+    /// The estimate at a non-specular point `p` seen from `wo`, reached with `edges` edges.
+    fn at_diffuse(
+        &self,
+        scene: &Scene,
+        p: &crate::geometry::SurfacePoint,
+        wo: crate::math::DVec3,
+        bsdf: &crate::bsdf::Bsdf,
+        edges: usize,
+        rng: &mut IndependentStream,
+    ) -> Rgb {
+        let mode = TransportMode::Radiance;
+        let mut l = Rgb::BLACK;
+        if edges + 1 > self.settings.max_edges {
+            return l;
+        }
+        let g = self.settings.gather_rays as f64;
+        let n_side = if p.n.dot(wo) >= 0.0 { p.n } else { -p.n };
+        // Caustics: L S+ x₁.
+        l += self
+            .caustic
+            .estimate(p.p, n_side, &self.caustic_lookup, |wi| {
+                bsdf.eval(wo, wi, mode)
+            });
+        // Direct light by next-event estimation (MIS with the gather rays).
+        let prims = &scene.bvh.primitives;
+        let choice = uniform(&mut rng.rng);
+        let u_light = [uniform(&mut rng.rng), uniform(&mut rng.rng)];
+        if let Some((li, p_choice)) = scene.light_distribution.sample(choice) {
+            let light = &scene.lights[li];
+            if let Some((lp, pdf_area)) = light.sample_point(prims, u_light) {
+                let d = lp.p - p.p;
+                let dist2 = d.length_squared();
+                if dist2 > 0.0 {
+                    let wi = d / dist2.sqrt();
+                    let (le, pdf_solid, delta) = match light {
+                        LightKind::Point { intensity, .. } => (*intensity, p_choice * dist2, true),
+                        _ => {
+                            let cos_l = lp.n.dot(-wi).abs();
+                            (
+                                light.radiance(lp.n, -wi),
+                                p_choice * pdf_area * dist2 / cos_l,
+                                false,
+                            )
+                        }
+                    };
+                    let f = bsdf.eval(wo, wi, mode);
+                    if !le.is_black() && !f.is_black() && pdf_solid > 0.0 && pdf_solid.is_finite() {
+                        let light_normal = if delta { None } else { Some(lp.n) };
+                        if scene.visible(p.p, Some(p.n), lp.p, light_normal) {
+                            let w = if delta {
+                                1.0
+                            } else {
+                                power_heuristic(pdf_solid, g * bsdf.pdf(wo, wi))
+                            };
+                            l += f * le * (wi.dot(p.ns).abs() * w / pdf_solid);
+                        }
+                    }
+                }
+            }
+        }
+        // Indirect light by gather rays.
+        let mut gathered = Rgb::BLACK;
+        for _ in 0..self.settings.gather_rays {
+            let (u_lobe, u) = (
+                uniform(&mut rng.rng),
+                [uniform(&mut rng.rng), uniform(&mut rng.rng)],
+            );
+            let Some(bs) = bsdf.sample(wo, u_lobe, u, mode) else {
+                continue;
+            };
+            if bs.pdf == 0.0 || bs.f.is_black() {
+                continue;
+            }
+            let weight = bs.f * (bs.wi.dot(p.ns).abs() / bs.pdf);
+            let ray = Ray::new(offset_origin(p.p, p.n, bs.wi), bs.wi);
+            if bs.delta {
+                // A delta lobe of x₁: the camera path continues.
+                gathered += weight * self.shade(scene, ray, edges, rng);
+                continue;
+            }
+            gathered += weight * self.gather(scene, ray, g * bs.pdf, edges, rng);
+        }
+        l + gathered * (1.0 / g)
+    }
+
+    /// One gather ray leaving a non-specular point, `pdf` its BSDF density times the number of
+    /// gather rays (the MIS weights count samples): the MIS-weighted emission it hits directly, then through specular bounces the global map's estimate at the
+    /// next non-specular point.
+    fn gather(
+        &self,
+        scene: &Scene,
+        mut ray: Ray,
+        pdf: f64,
+        mut edges: usize,
+        rng: &mut IndependentStream,
+    ) -> Rgb {
+        let mode = TransportMode::Radiance;
+        let mut beta = Rgb::WHITE;
+        let mut l = Rgb::BLACK;
+        let mut first = true;
+        while edges < self.settings.max_edges {
+            let Some(hit) = scene.intersect(&ray) else {
+                break;
+            };
+            edges += 1;
+            let p = hit.point;
+            let wo = -ray.d;
+            if first && let Some((li, light)) = scene.light_at(p.primitive) {
+                let le = light.radiance(p.n, wo);
+                if !le.is_black() {
+                    let pdf_light =
+                        scene.light_distribution.pdf(li) * light.pdf_position() * hit.t * hit.t
+                            / p.n.dot(wo).abs();
+                    l += le * power_heuristic(pdf, pdf_light);
+                }
+            }
+            first = false;
+            let Ok(bsdf) = scene.bsdf(&p) else { break };
+            if bsdf.is_delta_only() {
+                let (u_lobe, u) = (
+                    uniform(&mut rng.rng),
+                    [uniform(&mut rng.rng), uniform(&mut rng.rng)],
+                );
+                let Some(bs) = bsdf.sample(wo, u_lobe, u, mode) else {
+                    break;
+                };
+                if bs.pdf == 0.0 || bs.f.is_black() {
+                    break;
+                }
+                beta *= bs.f * (bs.wi.dot(p.ns).abs() / bs.pdf);
+                ray = Ray::new(offset_origin(p.p, p.n, bs.wi), bs.wi);
+                continue;
+            }
+            let n_side = if p.n.dot(wo) >= 0.0 { p.n } else { -p.n };
+            l += beta
+                * self
+                    .global
+                    .estimate(p.p, n_side, &self.global_lookup, |wi| {
+                        bsdf.eval(wo, wi, mode)
+                    });
+            break;
+        }
+        l
+    }
+}
+
+fn power_heuristic(a: f64, b: f64) -> f64 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
+}
+
+impl Estimator for PhotonMapper {
+    fn sample(
+        &self,
+        scene: &Scene,
+        pixel: usize,
+        stream: &mut IndependentStream,
+        _splats: &mut Vec<Splat>,
+    ) -> Rgb {
+        stream.start_stream(CAMERA_STREAM);
+        stream.seek(layout::FILM);
+        let film = scene.camera.film_position(pixel, stream.next_2d());
+        stream.seek(layout::LENS);
+        let lens = stream.next_2d();
+        let cs = scene.camera.sample_ray(film, lens);
+        if cs.we == 0.0 {
+            return Rgb::BLACK;
+        }
+        let l = self.shade(scene, cs.ray, 0, stream);
+        if l.is_finite() { l } else { Rgb::BLACK }
+    }
+
+    fn splats(&self) -> bool {
+        false
+    }
+}
