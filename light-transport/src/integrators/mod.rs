@@ -14,6 +14,7 @@
 //! full pass's, and the splat normalisation grows by exactly `q`.
 
 mod bdpt;
+pub mod direct;
 mod lt;
 mod pt;
 

@@ -2,10 +2,10 @@
 //! (Veach & Guibas 1995), with optional Russian roulette. Written independently of the
 //! bidirectional path machinery so the two check each other.
 
+use super::direct::{mis, next_event};
 use super::{Estimator, Splat};
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, offset_origin};
-use crate::light::LightKind;
 use crate::path::MisHeuristic;
 use crate::sampler::{CAMERA_STREAM, IndependentStream, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
@@ -34,13 +34,6 @@ impl Default for PathTracer {
     }
 }
 
-fn mis(a: f64, b: f64, h: MisHeuristic) -> f64 {
-    match h {
-        MisHeuristic::Balance => a / (a + b),
-        MisHeuristic::Power => a * a / (a * a + b * b),
-    }
-}
-
 impl Estimator for PathTracer {
     fn sample(
         &self,
@@ -63,7 +56,6 @@ impl Estimator for PathTracer {
         let mut l = Rgb::BLACK;
         let mut last_pdf = 0.0;
         let mut specular = true;
-        let prims = &scene.bvh.primitives;
         for bounces in 0..self.max_edges {
             let Some(hit) = scene.intersect(&ray) else {
                 break;
@@ -93,46 +85,8 @@ impl Estimator for PathTracer {
             stream.start_stream(TECHNIQUE_STREAM);
             let choice = stream.next_1d();
             let u_light = stream.next_2d();
-            if !bsdf.is_delta_only()
-                && let Some((li, p_choice)) = scene.light_distribution.sample(choice)
-            {
-                let light = &scene.lights[li];
-                if let Some((lp, pdf_area)) = light.sample_point(prims, u_light) {
-                    let d = lp.p - p.p;
-                    let dist2 = d.length_squared();
-                    if dist2 > 0.0 {
-                        let wi = d / dist2.sqrt();
-                        let (le, pdf_solid, delta) = match light {
-                            LightKind::Point { intensity, .. } => {
-                                (*intensity, p_choice * dist2, true)
-                            }
-                            _ => {
-                                let cos_l = lp.n.dot(-wi).abs();
-                                (
-                                    light.radiance(lp.n, -wi),
-                                    p_choice * pdf_area * dist2 / cos_l,
-                                    false,
-                                )
-                            }
-                        };
-                        let f = bsdf.eval(wo, wi, TransportMode::Radiance);
-                        if !le.is_black()
-                            && !f.is_black()
-                            && pdf_solid.is_finite()
-                            && pdf_solid > 0.0
-                        {
-                            let light_normal = if delta { None } else { Some(lp.n) };
-                            if scene.visible(p.p, Some(p.n), lp.p, light_normal) {
-                                let w = if delta {
-                                    1.0
-                                } else {
-                                    mis(pdf_solid, bsdf.pdf(wo, wi), self.heuristic)
-                                };
-                                l += beta * f * le * (wi.dot(p.ns).abs() * w / pdf_solid);
-                            }
-                        }
-                    }
-                }
+            if !bsdf.is_delta_only() {
+                l += beta * next_event(scene, &p, wo, &bsdf, choice, u_light, self.heuristic, 1.0);
             }
             // Continue by BSDF sampling from this vertex's block.
             // Vertex `bounces + 1` of the camera subpath.

@@ -21,8 +21,9 @@ use super::map::{Lookup, PhotonMap, PhotonMapError};
 use super::trace::trace_photons;
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, offset_origin};
+use crate::integrators::direct::{mis, next_event};
 use crate::integrators::{Estimator, Splat};
-use crate::light::LightKind;
+use crate::path::MisHeuristic;
 use crate::sampler::{CAMERA_STREAM, IndependentStream, SampleStream, layout};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -199,42 +200,9 @@ impl PhotonMapper {
                 bsdf.eval(wo, wi, mode)
             });
         // Direct light by next-event estimation (MIS with the gather rays).
-        let prims = &scene.bvh.primitives;
         let choice = uniform(&mut rng.rng);
         let u_light = [uniform(&mut rng.rng), uniform(&mut rng.rng)];
-        if let Some((li, p_choice)) = scene.light_distribution.sample(choice) {
-            let light = &scene.lights[li];
-            if let Some((lp, pdf_area)) = light.sample_point(prims, u_light) {
-                let d = lp.p - p.p;
-                let dist2 = d.length_squared();
-                if dist2 > 0.0 {
-                    let wi = d / dist2.sqrt();
-                    let (le, pdf_solid, delta) = match light {
-                        LightKind::Point { intensity, .. } => (*intensity, p_choice * dist2, true),
-                        _ => {
-                            let cos_l = lp.n.dot(-wi).abs();
-                            (
-                                light.radiance(lp.n, -wi),
-                                p_choice * pdf_area * dist2 / cos_l,
-                                false,
-                            )
-                        }
-                    };
-                    let f = bsdf.eval(wo, wi, mode);
-                    if !le.is_black() && !f.is_black() && pdf_solid > 0.0 && pdf_solid.is_finite() {
-                        let light_normal = if delta { None } else { Some(lp.n) };
-                        if scene.visible(p.p, Some(p.n), lp.p, light_normal) {
-                            let w = if delta {
-                                1.0
-                            } else {
-                                power_heuristic(pdf_solid, g * bsdf.pdf(wo, wi))
-                            };
-                            l += f * le * (wi.dot(p.ns).abs() * w / pdf_solid);
-                        }
-                    }
-                }
-            }
-        }
+        l += next_event(scene, p, wo, bsdf, choice, u_light, MisHeuristic::Power, g);
         // Indirect light by gather rays.
         let mut gathered = Rgb::BLACK;
         for _ in 0..self.settings.gather_rays {
@@ -288,7 +256,7 @@ impl PhotonMapper {
                     let pdf_light =
                         scene.light_distribution.pdf(li) * light.pdf_position() * hit.t * hit.t
                             / p.n.dot(wo).abs();
-                    l += le * power_heuristic(pdf, pdf_light);
+                    l += le * mis(pdf, pdf_light, MisHeuristic::Power);
                 }
             }
             first = false;
@@ -319,11 +287,6 @@ impl PhotonMapper {
         }
         l
     }
-}
-
-fn power_heuristic(a: f64, b: f64) -> f64 {
-    let (a2, b2) = (a * a, b * b);
-    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
 }
 
 impl Estimator for PhotonMapper {

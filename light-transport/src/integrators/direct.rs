@@ -1,0 +1,74 @@
+//! Next-event estimation (Veach & Guibas 1995): one light sample at a surface point, weighted by
+//! MIS against BSDF sampling. Shared by path tracing and the photon mapper's final gather.
+
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::geometry::SurfacePoint;
+use crate::light::LightKind;
+use crate::math::DVec3;
+use crate::path::MisHeuristic;
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+
+/// The MIS weight of a technique of density `a` against one of density `b` (densities times
+/// sample counts).
+pub fn mis(a: f64, b: f64, h: MisHeuristic) -> f64 {
+    match h {
+        MisHeuristic::Balance => a / (a + b),
+        MisHeuristic::Power => a * a / (a * a + b * b),
+    }
+}
+
+/// Light arriving at `p` (seen from `wo`, scattered by `bsdf`) from one point sampled on a light
+/// chosen with `choice` at `u_light`: `f L_e |cos| w / p`, with the MIS weight `w` against
+/// `bsdf_samples` BSDF samples (1 in a path tracer; a final gather's ray count). Point lights get
+/// weight 1. Black when the sample is occluded, behind the light or carries nothing.
+#[allow(clippy::too_many_arguments)]
+pub fn next_event(
+    scene: &Scene,
+    p: &SurfacePoint,
+    wo: DVec3,
+    bsdf: &Bsdf,
+    choice: f64,
+    u_light: [f64; 2],
+    heuristic: MisHeuristic,
+    bsdf_samples: f64,
+) -> Rgb {
+    let Some((li, p_choice)) = scene.light_distribution.sample(choice) else {
+        return Rgb::BLACK;
+    };
+    let light = &scene.lights[li];
+    let Some((lp, pdf_area)) = light.sample_point(&scene.bvh.primitives, u_light) else {
+        return Rgb::BLACK;
+    };
+    let d = lp.p - p.p;
+    let dist2 = d.length_squared();
+    if !(dist2 > 0.0) {
+        return Rgb::BLACK;
+    }
+    let wi = d / dist2.sqrt();
+    let (le, pdf_solid, delta) = match light {
+        LightKind::Point { intensity, .. } => (*intensity, p_choice * dist2, true),
+        _ => {
+            let cos_l = lp.n.dot(-wi).abs();
+            (
+                light.radiance(lp.n, -wi),
+                p_choice * pdf_area * dist2 / cos_l,
+                false,
+            )
+        }
+    };
+    let f = bsdf.eval(wo, wi, TransportMode::Radiance);
+    if le.is_black() || f.is_black() || !pdf_solid.is_finite() || !(pdf_solid > 0.0) {
+        return Rgb::BLACK;
+    }
+    let light_normal = if delta { None } else { Some(lp.n) };
+    if !scene.visible(p.p, Some(p.n), lp.p, light_normal) {
+        return Rgb::BLACK;
+    }
+    let w = if delta {
+        1.0
+    } else {
+        mis(pdf_solid, bsdf_samples * bsdf.pdf(wo, wi), heuristic)
+    };
+    f * le * (wi.dot(p.ns).abs() * w / pdf_solid)
+}
