@@ -11,6 +11,7 @@ use crate::spectrum::Rgb;
 
 /// The MIS weight of a technique of density `a` against one of density `b` (densities times
 /// sample counts).
+#[inline]
 pub fn mis(a: f64, b: f64, h: MisHeuristic) -> f64 {
     match h {
         MisHeuristic::Balance => a / (a + b),
@@ -23,6 +24,7 @@ pub fn mis(a: f64, b: f64, h: MisHeuristic) -> f64 {
 /// `bsdf_samples` BSDF samples (1 in a path tracer; a final gather's ray count). Point lights get
 /// weight 1. Black when the sample is occluded, behind the light or carries nothing.
 #[allow(clippy::too_many_arguments)]
+#[inline]
 pub fn next_event(
     scene: &Scene,
     p: &SurfacePoint,

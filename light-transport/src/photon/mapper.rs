@@ -156,18 +156,11 @@ impl PhotonMapper {
             }
             let Ok(bsdf) = scene.bsdf(&p) else { break };
             if bsdf.is_delta_only() {
-                let (u_lobe, u) = (
-                    uniform(&mut rng.rng),
-                    [uniform(&mut rng.rng), uniform(&mut rng.rng)],
-                );
-                let Some(bs) = bsdf.sample(wo, u_lobe, u, TransportMode::Radiance) else {
+                let Some((weight, next, _, _)) = bounce(&bsdf, &p, wo, rng) else {
                     break;
                 };
-                if bs.pdf == 0.0 || bs.f.is_black() {
-                    break;
-                }
-                beta *= bs.f * (bs.wi.dot(p.ns).abs() / bs.pdf);
-                ray = Ray::new(offset_origin(p.p, p.n, bs.wi), bs.wi);
+                beta *= weight;
+                ray = next;
                 continue;
             }
             l += beta * self.at_diffuse(scene, &p, wo, &bsdf, edges, rng);
@@ -206,31 +199,22 @@ impl PhotonMapper {
         // Indirect light by gather rays.
         let mut gathered = Rgb::BLACK;
         for _ in 0..self.settings.gather_rays {
-            let (u_lobe, u) = (
-                uniform(&mut rng.rng),
-                [uniform(&mut rng.rng), uniform(&mut rng.rng)],
-            );
-            let Some(bs) = bsdf.sample(wo, u_lobe, u, mode) else {
+            let Some((weight, ray, pdf, delta)) = bounce(bsdf, p, wo, rng) else {
                 continue;
             };
-            if bs.pdf == 0.0 || bs.f.is_black() {
-                continue;
-            }
-            let weight = bs.f * (bs.wi.dot(p.ns).abs() / bs.pdf);
-            let ray = Ray::new(offset_origin(p.p, p.n, bs.wi), bs.wi);
-            if bs.delta {
+            if delta {
                 // A delta lobe of x₁: the camera path continues.
                 gathered += weight * self.shade(scene, ray, edges, rng);
                 continue;
             }
-            gathered += weight * self.gather(scene, ray, g * bs.pdf, edges, rng);
+            gathered += weight * self.gather(scene, ray, g * pdf, edges, rng);
         }
         l + gathered * (1.0 / g)
     }
 
     /// One gather ray leaving a non-specular point, `pdf` its BSDF density times the number of
-    /// gather rays (the MIS weights count samples): the MIS-weighted emission it hits directly, then through specular bounces the global map's estimate at the
-    /// next non-specular point.
+    /// gather rays (the MIS weights count samples): the MIS-weighted emission it hits directly,
+    /// then through specular bounces the global map's estimate at the next non-specular point.
     fn gather(
         &self,
         scene: &Scene,
@@ -262,18 +246,11 @@ impl PhotonMapper {
             first = false;
             let Ok(bsdf) = scene.bsdf(&p) else { break };
             if bsdf.is_delta_only() {
-                let (u_lobe, u) = (
-                    uniform(&mut rng.rng),
-                    [uniform(&mut rng.rng), uniform(&mut rng.rng)],
-                );
-                let Some(bs) = bsdf.sample(wo, u_lobe, u, mode) else {
+                let Some((weight, next, _, _)) = bounce(&bsdf, &p, wo, rng) else {
                     break;
                 };
-                if bs.pdf == 0.0 || bs.f.is_black() {
-                    break;
-                }
-                beta *= bs.f * (bs.wi.dot(p.ns).abs() / bs.pdf);
-                ray = Ray::new(offset_origin(p.p, p.n, bs.wi), bs.wi);
+                beta *= weight;
+                ray = next;
                 continue;
             }
             let n_side = if p.n.dot(wo) >= 0.0 { p.n } else { -p.n };
@@ -287,6 +264,29 @@ impl PhotonMapper {
         }
         l
     }
+}
+
+/// Sample `bsdf` at `p` (seen from `wo`) with three numbers of `rng`: the weight `f |cos| / pdf`,
+/// the ray leaving, the density and whether a delta lobe was chosen; `None` when nothing leaves.
+fn bounce(
+    bsdf: &crate::bsdf::Bsdf,
+    p: &crate::geometry::SurfacePoint,
+    wo: crate::math::DVec3,
+    rng: &mut IndependentStream,
+) -> Option<(Rgb, Ray, f64, bool)> {
+    let u_lobe = uniform(&mut rng.rng);
+    let u = [uniform(&mut rng.rng), uniform(&mut rng.rng)];
+    let bs = bsdf.sample(wo, u_lobe, u, TransportMode::Radiance)?;
+    if bs.pdf == 0.0 || bs.f.is_black() {
+        return None;
+    }
+    let weight = bs.f * (bs.wi.dot(p.ns).abs() / bs.pdf);
+    Some((
+        weight,
+        Ray::new(offset_origin(p.p, p.n, bs.wi), bs.wi),
+        bs.pdf,
+        bs.delta,
+    ))
 }
 
 impl Estimator for PhotonMapper {
