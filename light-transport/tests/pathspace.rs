@@ -67,7 +67,14 @@ impl MutationKind {
     ];
 
     fn name(&self) -> &'static str {
-        light_transport::pathspace::REGISTRY[*self as usize].name
+        match self {
+            MutationKind::Bidirectional => "bidirectional",
+            MutationKind::LensSubpath => "lens-subpath",
+            MutationKind::Lens => "lens",
+            MutationKind::Caustic => "caustic",
+            MutationKind::MultiChain => "multi-chain",
+            MutationKind::NewPath => "new-path",
+        }
     }
 }
 

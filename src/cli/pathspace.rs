@@ -174,6 +174,7 @@ impl PathSpaceArgs {
                 Choice::Suitable => Selection::Suitability,
                 Choice::Fixed => Selection::Fixed,
             },
+            photon: Default::default(),
         };
         mutations.validate()?;
         Ok(mutations)

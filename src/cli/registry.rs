@@ -47,6 +47,7 @@ pub const ALGORITHMS: &[Entry] = &[
     algos::mept::ENTRY,
     algos::cmlt::ENTRY,
     algos::pm::ENTRY,
+    algos::mps::ENTRY,
 ];
 
 /// The algorithm called `name`.
@@ -88,6 +89,9 @@ pub struct AlgoArgs {
     /// Photon mapping options (pm).
     #[command(flatten)]
     pub pm: algos::pm::PmArgs,
+    /// Metropolis photon sampling options (mps).
+    #[command(flatten)]
+    pub mps: algos::mps::MpsArgs,
 }
 
 impl AlgoArgs {

@@ -363,7 +363,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
         };
         let round_start = Instant::now();
         let mut outputs: Vec<(K::Chunk, u64)> = (0..chains.len().div_ceil(size))
-            .map(|_| Default::default())
+            .map(|_| (sink.chunk(), 0))
             .collect();
         let slice = k.div_ceil(SLICES).max(1);
         let mut left = k;

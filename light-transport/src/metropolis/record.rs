@@ -78,7 +78,9 @@ impl<S: Recordable, R: Recorder<S>> Observer<S> for ExpectedValue<'_, R> {
 /// Where the driver puts what the chains record, round by round.
 pub trait Sink<S>: Send {
     /// A recorder for one group of chains in one round.
-    type Chunk: Recorder<S> + Default + Send;
+    type Chunk: Recorder<S> + Send;
+    /// An empty chunk.
+    fn chunk(&self) -> Self::Chunk;
     /// Absorb a chunk (called in chunk order).
     fn absorb(&mut self, chunk: Self::Chunk);
     /// The chains have made `mutations` mutations in all, on an image of `pixels` pixels.
@@ -87,6 +89,10 @@ pub trait Sink<S>: Send {
 
 impl<S: Recordable> Sink<S> for Film {
     type Chunk = Vec<Splat>;
+
+    fn chunk(&self) -> Vec<Splat> {
+        Vec::new()
+    }
 
     fn absorb(&mut self, chunk: Vec<Splat>) {
         for (r, v) in chunk {

@@ -31,7 +31,9 @@ pub mod new_path;
 pub mod normal_change;
 pub mod path;
 pub mod perturbation;
+pub mod photon_map_proposal;
 pub mod state;
+pub mod user_path;
 pub mod walk;
 
 pub use bidirectional::{Bidirectional, Deletion};
@@ -41,8 +43,12 @@ pub use manifold_perturbation::{
 };
 pub use mlt::PathMlt;
 pub use mutation::{Change, Mutation, MutationContext, MutationProposal, Registration};
-pub use mutations::{MutationProbabilities, MutationSettings, Mutations, REGISTRY};
+pub use mutations::{
+    MutationProbabilities, MutationSettings, Mutations, PhotonProposals, REGISTRY, UserPathRule,
+};
 pub use new_path::NewPath;
 pub use path::{FullPath, Scratch};
 pub use perturbation::PerturbationSettings;
+pub use photon_map_proposal::PhotonMapProposal;
 pub use state::PathState;
+pub use user_path::{UserPath, UserPathError, UserPathProposal, UserPaths};

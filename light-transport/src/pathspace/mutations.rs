@@ -13,6 +13,7 @@ use super::mutation::{Mutation, MutationContext, MutationProposal, Registration}
 use super::new_path::NewPath;
 use super::perturbation::PerturbationSettings;
 use super::state::PathState;
+use super::user_path::UserPaths;
 use crate::metropolis::ImportanceKind;
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -21,10 +22,16 @@ use mcmc_core::proposals::{Mixture, MixtureRule, Selection};
 use mcmc_core::{Chain, ChainRng, Kernel, MetropolisHastings};
 use std::fmt;
 use std::str::FromStr;
+use std::sync::Arc;
+
+type Component<'a> = Box<dyn mcmc_core::Proposal<PathState> + Send + Sync + 'a>;
+
+const REGISTRY_USER_PATH: usize = 1;
 
 /// Every path-space mutation, in statistics order. A new mutation is one file and one line here.
 pub const REGISTRY: &[Registration] = &[
     super::bidirectional::REGISTRATION,
+    super::user_path::REGISTRATION,
     super::lens_subpath::REGISTRATION,
     super::lens::REGISTRATION,
     super::caustic::REGISTRATION,
@@ -32,6 +39,7 @@ pub const REGISTRY: &[Registration] = &[
     super::new_path::REGISTRATION,
     super::manifold_perturbation::TOWARD_LIGHT,
     super::manifold_perturbation::TOWARD_EYE,
+    super::photon_map_proposal::REGISTRATION,
 ];
 
 /// The index of the registered mutation `name`.
@@ -190,6 +198,59 @@ pub struct MutationSettings {
     pub manifold: ManifoldPerturbationSettings,
     /// Lengths of new paths.
     pub new_path: NewPath,
+    /// The proposals of Metropolis photon sampling.
+    pub photon: PhotonProposals,
+}
+
+/// How the user-path proposal joins a mixture run with the per-component rule.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum UserPathRule {
+    /// With the bidirectional mutation as one component accepting by the combined rule (Fan,
+    /// Chenney & Lai 2005, eq. 7).
+    #[default]
+    Hybrid,
+    /// On its own ratio, like every other component — exact, but from a path away from every
+    /// user path its candidates can never be accepted (the reverse move is impossible). Kept to
+    /// show it.
+    PerComponent,
+}
+
+/// Settings of the proposals of Metropolis photon sampling (Fan, Chenney & Lai 2005, §5).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhotonProposals {
+    /// Cone half-angle `γ` of the photon-map proposal, radians (30°).
+    pub photon_map_gamma: f64,
+    /// The user paths (empty: the user-path proposal never applies).
+    pub user_paths: Arc<UserPaths>,
+    /// How the user-path proposal is mixed under the per-component rule.
+    pub user_path_rule: UserPathRule,
+}
+
+impl Default for PhotonProposals {
+    fn default() -> Self {
+        Self {
+            photon_map_gamma: super::photon_map_proposal::DEFAULT_GAMMA_DEGREES.to_radians(),
+            user_paths: Arc::new(UserPaths::default()),
+            user_path_rule: UserPathRule::Hybrid,
+        }
+    }
+}
+
+impl PhotonProposals {
+    /// Check `γ`.
+    pub fn validate(&self) -> Result<()> {
+        if self.photon_map_gamma > 0.0 && self.photon_map_gamma <= std::f64::consts::FRAC_PI_2 {
+            Ok(())
+        } else {
+            Err(Error::InvalidParameter {
+                name: "photon-map cone".into(),
+                reason: format!(
+                    "γ must lie in (0°, 90°], got {}°",
+                    self.photon_map_gamma.to_degrees()
+                ),
+            })
+        }
+    }
 }
 
 /// A mutation set: settings, selection weights, and the mixture rules.
@@ -209,6 +270,8 @@ pub struct Mutations {
     pub rule: MixtureRule,
     /// Fixed selection, or in proportion to suitability for the current path.
     pub selection: Selection,
+    /// The proposals of Metropolis photon sampling (photon-map cone, user paths).
+    pub photon: PhotonProposals,
 }
 
 impl Mutations {
@@ -223,6 +286,7 @@ impl Mutations {
             manifold: ManifoldPerturbationSettings::default(),
             rule: MixtureRule::PerComponent,
             selection: Selection::Suitability,
+            photon: PhotonProposals::default(),
         }
     }
 
@@ -231,6 +295,18 @@ impl Mutations {
         self.probabilities.validate()?;
         self.perturbation.validate()?;
         self.manifold.validate()?;
+        self.photon.validate()?;
+        if self
+            .probabilities
+            .probability(super::user_path::REGISTRATION.name)
+            > 0.0
+            && self.photon.user_paths.is_empty()
+        {
+            return Err(Error::InvalidParameter {
+                name: "mutations".into(),
+                reason: "the user-path proposal needs user paths (--user-paths FILE)".into(),
+            });
+        }
         let manifold = self
             .probabilities
             .probability(super::manifold_perturbation::TOWARD_LIGHT.name)
@@ -263,6 +339,7 @@ impl Mutations {
             perturbation: self.perturbation,
             manifold: self.manifold,
             new_path,
+            photon: self.photon.clone(),
         }
     }
 
@@ -305,25 +382,46 @@ impl Mutations {
             walks,
         };
         const _: () = assert!(REGISTRY.len() <= super::state::CACHED_MUTATIONS);
-        let components = REGISTRY
+        let bad = |e: mcmc_core::McmcError| Error::InvalidParameter {
+            name: "mutation probabilities".into(),
+            reason: e.to_string(),
+        };
+        let mut components: Vec<(f64, Component<'a>)> = REGISTRY
             .iter()
             .zip(&self.probabilities.0)
             .enumerate()
             .map(|(i, (r, &w))| {
-                let p: Box<dyn mcmc_core::Proposal<PathState> + Send + Sync + 'a> =
-                    Box::new(MutationProposal {
-                        mutation: (r.build)(&context),
-                        index: Some(i),
-                    });
+                let p: Component<'a> = Box::new(MutationProposal {
+                    mutation: (r.build)(&context),
+                    index: Some(i),
+                });
                 (w, p)
             })
             .collect();
+        // Eq. 7 of Fan, Chenney & Lai 2005: under the per-component rule, the user-path proposal
+        // and the bidirectional mutation form one component (chosen with P_UP + P_BD) whose
+        // choice between the two is accepted by the combined rule. They stand first and second
+        // in the registry, so statistics keep the registry's order.
+        let p_up = self.probabilities.0[REGISTRY_USER_PATH];
+        if self.rule == MixtureRule::PerComponent
+            && self.photon.user_path_rule == UserPathRule::Hybrid
+            && p_up > 0.0
+        {
+            // (REGISTRY[0] is the bidirectional mutation; a unit test checks it.)
+            let mut pair = components.drain(..2);
+            let (bd, up) = (pair.next(), pair.next());
+            drop(pair);
+            if let (Some(bd), Some(up)) = (bd, up) {
+                let total = bd.0 + up.0;
+                let hybrid = Mixture::new(vec![bd, up], MixtureRule::Combined)
+                    .map_err(bad)?
+                    .with_selection(self.selection);
+                components.insert(0, (total, Box::new(hybrid)));
+            }
+        }
         Mixture::new(components, self.rule)
             .map(|m| m.with_selection(self.selection))
-            .map_err(|e| Error::InvalidParameter {
-                name: "mutation probabilities".into(),
-                reason: e.to_string(),
-            })
+            .map_err(bad)
     }
 
     /// `n` Metropolis–Hastings steps of `chain` with `proposal` (from [`Mutations::proposal`]).
@@ -346,5 +444,16 @@ impl Mutations {
     /// Statistics names (the registered mutations).
     pub fn kinds() -> Vec<String> {
         names()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_hybrid_pair_stands_first_in_the_registry() {
+        assert_eq!(REGISTRY[0].name, "bidirectional");
+        assert_eq!(REGISTRY[REGISTRY_USER_PATH].name, "user-path");
     }
 }

@@ -126,7 +126,8 @@ pub fn lens_endpoint(scene: &Scene, rng: &mut ChainRng) -> Option<Vertex> {
     ))
 }
 
-fn endpoint(kind: VertexKind, point: SurfacePoint) -> Vertex {
+/// An endpoint vertex of `kind` at `point` (no BSDF, not delta).
+pub fn endpoint(kind: VertexKind, point: SurfacePoint) -> Vertex {
     Vertex {
         kind,
         point,
@@ -182,6 +183,33 @@ pub fn angular_offset_pdf(a: DVec3, b: DVec3, theta1: f64, theta2: f64) -> f64 {
     let s = theta.sin();
     if s > 0.0 {
         exponential_radius_pdf(theta, theta1, theta2) / (TAU * s)
+    } else {
+        0.0
+    }
+}
+
+/// A direction in the cone of half-angle `beta` about unit `axis`, with the angle `θ` to the axis
+/// uniform in `[0, β)` and the azimuth uniform (Fan, Chenney & Lai 2005, §5.1 and §5.3). Its
+/// density in solid angle is [`cone_pdf`].
+pub fn cone_direction(axis: DVec3, beta: f64, rng: &mut ChainRng) -> DVec3 {
+    let phi = TAU * uniform(rng);
+    let theta = beta * uniform(rng);
+    let local = DVec3::new(
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        theta.cos(),
+    );
+    Frame::from_normal(axis).to_world(local).normalize()
+}
+
+/// Solid-angle density of [`cone_direction`] about `axis` producing `w`: `1 / (2π β sin θ)` for
+/// `θ < β`, 0 outside. (The paper prints `1/(2πβ)`, the density of `(θ, φ)`; per steradian the
+/// `sin θ` of the area element belongs in it.)
+pub fn cone_pdf(axis: DVec3, w: DVec3, beta: f64) -> f64 {
+    let theta = axis.cross(w).length().atan2(axis.dot(w));
+    let s = theta.sin();
+    if theta < beta && s > 0.0 {
+        1.0 / (TAU * beta * s)
     } else {
         0.0
     }

@@ -86,12 +86,25 @@ pub struct PhotonMapper {
     caustic: PhotonMap,
     global_lookup: Lookup,
     caustic_lookup: Lookup,
+    /// Lines about how the maps were filled (Metropolis photon sampling's statistics).
+    notes: Vec<String>,
 }
 
 impl PhotonMapper {
     /// Trace the photons and build the maps.
     pub fn new(scene: &Scene, settings: PhotonMapping) -> Result<Self, PhotonMappingError> {
+        Self::check(&settings)?;
         let s = &settings;
+        let (global, _) = trace_photons(scene, s.global_paths, s.max_edges, s.seed);
+        let (_, caustic) = trace_photons(scene, s.caustic_paths, s.max_edges, s.seed ^ 0xCA05);
+        let notes = vec![format!(
+            "photons    traced: {} paths for the global map, {} for the caustic map",
+            s.global_paths, s.caustic_paths
+        )];
+        Self::from_photons(scene, settings, global, caustic, notes)
+    }
+
+    fn check(s: &PhotonMapping) -> Result<(), PhotonMappingError> {
         if s.gather_rays == 0
             || s.k < 2
             || s.max_edges < 1
@@ -103,16 +116,34 @@ impl PhotonMapper {
                 s.gather_rays, s.k, s.global_radius, s.caustic_radius
             )));
         }
+        Ok(())
+    }
+
+    /// Photon mapping's final gather over given photons (Metropolis photon sampling's), with
+    /// `notes` on how they were made for the summary.
+    pub fn from_photons(
+        scene: &Scene,
+        settings: PhotonMapping,
+        global: Vec<super::Photon>,
+        caustic: Vec<super::Photon>,
+        notes: Vec<String>,
+    ) -> Result<Self, PhotonMappingError> {
+        Self::check(&settings)?;
+        let s = &settings;
         let radius = 0.5 * (scene.bounds.1 - scene.bounds.0).length();
-        let (global, _) = trace_photons(scene, s.global_paths, s.max_edges, s.seed);
-        let (_, caustic) = trace_photons(scene, s.caustic_paths, s.max_edges, s.seed ^ 0xCA05);
         Ok(Self {
             global: PhotonMap::new(global)?,
             caustic: PhotonMap::new(caustic)?,
             global_lookup: Lookup::new(s.k, s.global_radius * radius),
             caustic_lookup: Lookup::new(s.k, s.caustic_radius * radius),
             settings,
+            notes,
         })
+    }
+
+    /// The photon maps `(global, caustic)`.
+    pub fn maps(&self) -> (&PhotonMap, &PhotonMap) {
+        (&self.global, &self.caustic)
     }
 
     /// Photons in the global and the caustic map.
@@ -124,12 +155,12 @@ impl PhotonMapper {
     pub fn summary(&self, _: f64) -> Vec<String> {
         let (g, c) = self.photons();
         let b = PhotonMap::bytes_per_photon();
-        vec![format!(
-            "photons    global {g} from {} paths, caustic {c} from {} paths; {b} bytes per photon ({:.1} MB)",
-            self.settings.global_paths,
-            self.settings.caustic_paths,
+        let mut out = self.notes.clone();
+        out.push(format!(
+            "photons    global {g}, caustic {c}; {b} bytes per photon ({:.1} MB)",
             ((g + c) * b) as f64 / 1e6
-        )]
+        ));
+        out
     }
 
     /// Radiance arriving along `ray` (toward its origin) through specular bounces from the camera

@@ -2,15 +2,16 @@
 //!
 //! * [`map`] — photons in a k-d tree and the density estimate of reflected radiance;
 //! * [`trace`] — photon tracing from the lights into a global and a caustic map;
-//! * [`mapper`] — standard photon mapping with a final gather (`--algo pm`).
-//!
-//! Built so far: the photon map, its radiance estimate, photon tracing and standard photon mapping.
-//! Not yet: Metropolis photon sampling (`--algo mps`).
+//! * [`mapper`] — standard photon mapping with a final gather (`--algo pm`);
+//! * [`metropolis`] — Metropolis photon sampling (`--algo mps`): the maps filled from chains over
+//!   complete light-to-eye paths, read by the same final gather.
 
 pub mod map;
 pub mod mapper;
+pub mod metropolis;
 pub mod trace;
 
 pub use map::{Lookup, Photon, PhotonMap};
 pub use mapper::{PhotonMapper, PhotonMapping};
+pub use metropolis::{MpsSettings, MpsStats, mps_mapper, sample_photons};
 pub use trace::trace_photons;

@@ -8,6 +8,7 @@ pub mod memlt;
 pub mod mept;
 pub mod mlt;
 pub mod mmlt;
+pub mod mps;
 pub mod pm;
 pub mod pssmlt;
 pub mod pt;
