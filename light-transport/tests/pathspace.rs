@@ -66,6 +66,11 @@ impl MutationKind {
         MutationKind::NewPath,
     ];
 
+    /// Its index in the registry (and in the statistics).
+    fn index(&self) -> usize {
+        light_transport::pathspace::mutations::index_of(self.name()).unwrap()
+    }
+
     fn name(&self) -> &'static str {
         match self {
             MutationKind::Bidirectional => "bidirectional",
@@ -93,6 +98,7 @@ fn mutations(probabilities: MutationProbabilities) -> Mutations {
         manifold: Default::default(),
         rule: MixtureRule::PerComponent,
         selection: Selection::Fixed,
+        photon: Default::default(),
     }
 }
 
@@ -112,7 +118,7 @@ fn each_mutation_with_new_paths_converges_to_bdpt() {
             let mlt = PathMlt::new(mutations(with_new_path(kind))).unwrap();
             let (images, stats) = runs(&scene, &mlt);
             let p = min_p(&images, &reference);
-            let k = &stats.kinds[kind as usize];
+            let k = &stats.kinds[kind.index()];
             println!(
                 "{name} {}: p = {p:.3e}, proposed {}, accepted {:.1}%, not applicable {}, failed {}",
                 kind.name(),
@@ -165,7 +171,7 @@ fn inapplicable_mutations_are_counted() {
             seeding: Seeding::Resample,
         };
         let (_, stats) = metropolis::run(&scene, &mlt, &settings, |_, _, _| true).unwrap();
-        let k = &stats.stats.kinds[kind as usize];
+        let k = &stats.stats.kinds[kind.index()];
         println!(
             "{}: proposed {}, not applicable {}, failed {}",
             kind.name(),
@@ -177,7 +183,7 @@ fn inapplicable_mutations_are_counted() {
         assert!(k.accepted + k.not_applicable + k.failed <= k.proposed);
         // Every new-path proposal applies.
         assert_eq!(
-            stats.stats.kinds[MutationKind::NewPath as usize].not_applicable,
+            stats.stats.kinds[MutationKind::NewPath.index()].not_applicable,
             0
         );
     }

@@ -59,7 +59,7 @@ use light_transport::metropolis::ImportanceKind;
 use light_transport::path::{Vertex, VertexKind};
 use light_transport::pathspace::{
     Bidirectional, Change, Deletion, FullPath, MutationProbabilities, Mutations, NewPath,
-    PathState, PerturbationSettings,
+    PathState, PerturbationSettings, PhotonProposals, UserPathRule, UserPaths,
 };
 use light_transport::sampler::IndependentStream;
 use light_transport::scene::Scene;
@@ -81,6 +81,7 @@ enum MutationKind {
     NewPath,
     ManifoldLight,
     ManifoldEye,
+    PhotonMap,
 }
 
 impl MutationKind {
@@ -94,6 +95,7 @@ impl MutationKind {
             MutationKind::NewPath => "new-path",
             MutationKind::ManifoldLight => "manifold-light",
             MutationKind::ManifoldEye => "manifold-eye",
+            MutationKind::PhotonMap => "photon-map",
         }
     }
 }
@@ -311,6 +313,7 @@ fn mutations() -> Mutations {
         probabilities: MutationProbabilities::default(),
         perturbation: fx().settings,
         manifold: Default::default(),
+        photon: Default::default(),
     }
 }
 
@@ -568,6 +571,31 @@ fn t_manifold(f: &Fixture, from: &[Vertex], to: &[Vertex], b: usize, toward_ligh
     let (w_from, w_to) = (dir(&from[a], &from[b]), dir(&to[a], &to[b]));
     let d = vmf_pdf(LAMBDA * LAMBDA * p, w_from, w_to);
     d / cos_at(f, &to[a], w_to) * geometry(f, &to[a], &to[b]) / strategies
+}
+
+/// The photon-map proposal's cone half-angle (the library's default, 30°).
+const GAMMA: f64 = 30.0 * PI / 180.0;
+
+/// Solid-angle density of a direction `w` drawn with its angle to `axis` uniform in `[0, β)` and a
+/// uniform azimuth: `1/(2πβ sin θ)` inside the cone.
+fn cone_density(axis: DVec3, w: DVec3, beta: f64) -> f64 {
+    let theta = axis.cross(w).length().atan2(axis.dot(w));
+    if theta < beta && theta > 0.0 {
+        1.0 / (TAU * beta * theta.sin())
+    } else {
+        0.0
+    }
+}
+
+/// Photon-map proposal `from → to` (non-specular: `x_d = v_{k−1}` keeps its place and the direction
+/// back to `v_{k−2}` turns inside the cone of half-angle γ about the current one; the traced hit
+/// is the new `v_{k−2}`): area density at `to[k−2]`.
+fn t_photon_map(f: &Fixture, from: &[Vertex], to: &[Vertex]) -> f64 {
+    let k = from.len() - 1;
+    let (d, a) = (&from[k - 1], k - 2);
+    let (wx, wy) = (dir(d, &from[a]), dir(&to[k - 1], &to[a]));
+    let d2 = (to[a].p() - to[k - 1].p()).length_squared();
+    cone_density(wx, wy, GAMMA) * cos_at(f, &to[a], wy) / d2
 }
 
 /// New-path mutation: `P_len(k)/(k+1) · Σ_s p_s`.
@@ -845,6 +873,13 @@ fn densities(
             )
         }
         MutationKind::NewPath => (t_new_path(f, np, y), t_new_path(f, np, x)),
+        MutationKind::PhotonMap => {
+            assert_eq!(y.len(), x.len());
+            for i in (0..=k).filter(|&i| i != k - 2) {
+                assert!(same_point(&x[i], &y[i]), "photon map moved vertex {i}");
+            }
+            (t_photon_map(f, x, y), t_photon_map(f, y, x))
+        }
         MutationKind::ManifoldLight | MutationKind::ManifoldEye => {
             assert_eq!(y.len(), x.len());
             let moved: Vec<usize> = (0..=k).filter(|&i| !same_point(&x[i], &y[i])).collect();
@@ -1041,6 +1076,11 @@ fn pointwise_new_path() {
 }
 
 #[test]
+fn pointwise_photon_map() {
+    check_pointwise(MutationKind::PhotonMap, 109, 0.5, &["k=3", "k=4", "k=5"]);
+}
+
+#[test]
 fn pointwise_manifold_toward_the_light() {
     check_pointwise(MutationKind::ManifoldLight, 107, 0.5, &K_FROM_2);
 }
@@ -1200,6 +1240,164 @@ fn pointwise_combined_rule() {
     assert!(compared >= WANT);
     assert_eq!(bad, 0, "combined ratios differ");
     assert!(shared >= 200, "only {shared} proposals share their change");
+}
+
+// ---------------------------------------------------------------------------------------------
+// (b'') The user-path proposal and its hybrid with the bidirectional mutation (Fan et al. eq. 7).
+// ---------------------------------------------------------------------------------------------
+
+/// Two user paths: light → floor (β = 15°), and light → floor → back wall (β = 10°).
+const USER_PATHS: &str = "# test paths\npath beta=15\n0.05 1.99 -0.55\n0.3 0.0 0.2\npath beta=10\n-0.1 1.99 -0.65\n-0.5 0.0 -0.8\n0.2 1.0 -2.0\n";
+
+/// The same paths as this file reads them: points and cone half-angles (radians).
+fn user_paths_here() -> Vec<(Vec<DVec3>, Vec<f64>)> {
+    vec![
+        (
+            vec![DVec3::new(0.05, 1.99, -0.55), DVec3::new(0.3, 0.0, 0.2)],
+            vec![15f64.to_radians()],
+        ),
+        (
+            vec![
+                DVec3::new(-0.1, 1.99, -0.65),
+                DVec3::new(-0.5, 0.0, -0.8),
+                DVec3::new(0.2, 1.0, -2.0),
+            ],
+            vec![10f64.to_radians(); 2],
+        ),
+    ]
+}
+
+/// Which of the emitter quad's two triangles (`p, p+a, p+a+b` and `p, p+a+b, p+b`) holds `q`.
+fn light_triangle(q: DVec3) -> usize {
+    let s = (q.x - LIGHT_CORNER.x) / LIGHT_SIDE;
+    let t = (q.z - LIGHT_CORNER.z) / LIGHT_SIDE;
+    (t > s) as usize
+}
+
+/// User-path proposal `from → to` with record `c`: the light part `to[0 ..= m]` is new, drawn
+/// uniformly on the triangle of the light holding `u_0`, then by cones about the directions toward
+/// the next user point; `(1/N_UP) Σ_i C_i Π` (eq. 6) in area measure, 0 when the record is not a
+/// user-path move (light part replaced, `x_d = v_{k−1}` and the lens kept).
+fn t_user_path(f: &Fixture, from: &[Vertex], to: &[Vertex], c: Change) -> f64 {
+    let k = from.len() - 1;
+    if c.l != -1 || c.m + 1 != k || c.added < 2 || to.len() != c.added + 2 {
+        return 0.0;
+    }
+    let m = c.added - 1;
+    let paths = user_paths_here();
+    let mut sum = 0.0;
+    for (u, beta) in &paths {
+        if u.len() != m + 1 || light_triangle(u[0]) != light_triangle(to[0].p()) {
+            continue;
+        }
+        let mut t = 2.0 / (LIGHT_SIDE * LIGHT_SIDE);
+        for j in 0..m {
+            let w = dir(&to[j], &to[j + 1]);
+            let d2 = (to[j + 1].p() - to[j].p()).length_squared();
+            t *= cone_density((u[j + 1] - to[j].p()).normalize(), w, beta[j]) * cos_at(f, &to[j + 1], w)
+                / d2;
+        }
+        sum += t;
+    }
+    sum / paths.len() as f64
+}
+
+/// The hybrid of eq. 7 with `P_UP = P_BD`: `(T_BD + T_UP)/2` for the change `c`.
+fn t_hybrid(f: &Fixture, from: &[Vertex], to: &[Vertex], c: Change) -> f64 {
+    let (k, kt) = (from.len() - 1, to.len() - 1);
+    let bd = Bidirectional {
+        max_edges: MAX_EDGES,
+    };
+    let d = Deletion { l: c.l, m: c.m };
+    let t_bd = if d.allowed(k) && c.result_edges(k) == Some(kt) {
+        t_bidirectional(f, &bd, from, to, d, c.added, None)
+    } else {
+        0.0
+    };
+    0.5 * t_bd + 0.5 * t_user_path(f, from, to, c)
+}
+
+/// The library's user-path proposal mixed with the bidirectional mutation (half each) reports
+/// `ln[I(f(ȳ)) T(x̄|ȳ) / (I(f(x̄)) T(ȳ|x̄))]` with `T = (T_BD + T_UP)/2` (eq. 7), checked against this
+/// file's densities on 2000 finite proposals, several hundred of them user-path moves. Mixed by the
+/// per-component rule instead, the user-path moves report their own ratio, which is −∞ from every
+/// path away from the user paths: those disagree with eq. 7 (caught), and none is ever accepted.
+#[test]
+fn pointwise_user_path_hybrid() {
+    use mcmc_core::Proposal;
+    let f = fx();
+    let np = new_path_lengths();
+    let paths = UserPaths::parse(USER_PATHS, "test", &f.scene).expect("user paths");
+    assert_eq!(paths.len(), 2);
+    for rule in [UserPathRule::Hybrid, UserPathRule::PerComponent] {
+        let m = Mutations {
+            probabilities: MutationProbabilities::of(&[("bidirectional", 0.5), ("user-path", 0.5)])
+                .expect("probabilities"),
+            photon: PhotonProposals {
+                user_paths: std::sync::Arc::new(paths.clone()),
+                user_path_rule: rule,
+                ..Default::default()
+            },
+            ..mutations()
+        };
+        m.validate().expect("valid");
+        let mixture = m.proposal(&f.scene, np.clone()).expect("mixture");
+        let currents = current_paths();
+        let (mut compared, mut bad, mut up_compared, mut up_finite, mut up_proposed) = (0, 0, 0, 0, 0);
+        let (mut proposals, mut worst) = (0usize, 0.0f64);
+        let mut y = PathState::default();
+        while compared < WANT && proposals < 100 * WANT {
+            let x = &currents[proposals % currents.len()];
+            let mut rng = stream(110, proposals as u64);
+            proposals += 1;
+            let p = mixture.propose(x, &mut y, &mut rng);
+            if p.failure.is_some() || !y.carries_light() {
+                continue;
+            }
+            let c = y.change.expect("a record");
+            let (xv, yv) = (&x.path.vertices, &y.path.vertices);
+            let mine = ln_ratio(f, xv, yv, t_hybrid(f, xv, yv, c), t_hybrid(f, yv, xv, c.reverse()));
+            let up = p.kind == 1;
+            up_proposed += up as usize;
+            up_finite += (up && p.ln_ratio.is_finite()) as usize;
+            if !mine.is_finite() && !p.ln_ratio.is_finite() {
+                continue;
+            }
+            compared += 1;
+            up_compared += up as usize;
+            let diff = (mine - p.ln_ratio).abs();
+            if diff.is_finite() {
+                worst = worst.max(diff);
+            }
+            let agree = mine.is_finite() == p.ln_ratio.is_finite()
+                && (!mine.is_finite() || diff <= 1e-6 * p.ln_ratio.abs().max(1.0));
+            if !agree {
+                bad += 1;
+                if bad <= 3 {
+                    println!(
+                        "  kind {} {c:?} k {}→{}: reported {}, eq. 7 {mine} (T_UP fwd {:.3e} back {:.3e})",
+                        p.kind,
+                        xv.len() - 1,
+                        yv.len() - 1,
+                        p.ln_ratio,
+                        t_user_path(f, xv, yv, c),
+                        t_user_path(f, yv, xv, c.reverse())
+                    );
+                }
+            }
+        }
+        println!(
+            "{rule:?}: {proposals} proposals, {compared} compared ({up_compared} user-path moves), {bad} disagree with eq. 7 (max |Δ| {worst:.2e} where finite); user-path moves with a finite ratio: {up_finite} of {up_proposed}"
+        );
+        assert!(compared >= WANT && up_compared >= 200, "too few comparisons");
+        match rule {
+            UserPathRule::Hybrid => assert_eq!(bad, 0, "the hybrid's ratios differ from eq. 7"),
+            UserPathRule::PerComponent => {
+                assert!(bad >= 200, "the per-component rule was not caught ({bad})");
+                assert_eq!(up_finite, 0, "a user-path move reversed itself");
+            }
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1647,6 +1845,43 @@ fn numerical_manifold_perturbation() {
     );
 }
 
+/// Photon-map proposal of the fixed `k = 3` path: from the wall vertex `v_2` the direction back to
+/// `v_1` turns inside the 30° cone, and the new `v_1` lands in a floor patch around the old one;
+/// `T` = cone density × solid-angle-to-area. The broken density is the one the paper prints,
+/// `1/(2πγ)` per steradian, without the `sin θ` of the cone's area element.
+fn photon_map_estimate() -> &'static Estimate {
+    static E: OnceLock<Estimate> = OnceLock::new();
+    E.get_or_init(|| {
+        let f = fx();
+        let x = fixed_k3();
+        let xv = x.path.vertices.clone();
+        let patch = Patch::floor([P1_K3.x - 0.15, P1_K3.x + 0.25], [P1_K3.z - 0.2, P1_K3.z + 0.2]);
+        for c in patch.corners() {
+            let (a, b) = ((P1_K3 - P2_K3).normalize(), (c - P2_K3).normalize());
+            let theta = a.cross(b).length().atan2(a.dot(b));
+            assert!(theta < 0.95 * GAMMA, "{theta}");
+        }
+        let np = new_path_lengths();
+        let mut y = PathState::default();
+        estimate("photon map", patch.area(), 200_000, 206, |rng| {
+            y.path.vertices.clear();
+            propose(MutationKind::PhotonMap, &np, &x, rng, &mut y).ok()?;
+            let yv = &y.path.vertices;
+            (yv.len() == 4 && patch.contains(&yv[1])).then(|| {
+                let t = t_photon_map(f, &xv, yv);
+                let (wx, wy) = (dir(&xv[2], &xv[1]), dir(&yv[2], &yv[1]));
+                let sin = wx.cross(wy).length();
+                (1.0 / t, 1.0 / (t * sin))
+            })
+        })
+    })
+}
+
+#[test]
+fn numerical_photon_map() {
+    assert_accepted("photon map", photon_map_estimate());
+}
+
 #[test]
 fn numerical_new_path() {
     assert_accepted("new path", new_path_estimate());
@@ -1669,4 +1904,5 @@ fn numerical_checks_reject_wrong_densities() {
     assert_rejected("new path, one strategy", new_path_estimate());
     assert_rejected("manifold from the lens × 1.15", manifold_light_estimate());
     assert_rejected("manifold from the light × 1.15", manifold_eye_estimate());
+    assert_rejected("photon map, the paper's 1/(2πγ)", photon_map_estimate());
 }

@@ -47,7 +47,7 @@ use crate::metropolis::{MetropolisSettings, MetropolisStats, Recorder, Sink, run
 use crate::path::{Vertex, connect_unoccluded, unoccluded};
 use crate::pathspace::path::retrace;
 use crate::pathspace::walk::{lens_endpoint, trace};
-use crate::pathspace::{FullPath, PathMlt, PathState};
+use crate::pathspace::{FullPath, MutationProbabilities, PathMlt, PathState};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use mcmc_core::ChainRng;
@@ -177,12 +177,15 @@ fn continuation_succeeds(
 }
 
 /// The photon a path stores per unit of deposit weight `b/I(state)` and per mutation: its storage
-/// point, and `I(state) β_L(x_j) T / I(C*_k)` (module docs) — `None` when it stores nothing.
+/// point, and `I(state) β_L(x_j) Â⁻¹ / I(C*_k)` (module docs) with `Â⁻¹` from continuations drawn
+/// until `successes` of them land in `Q` — `None` when it stores nothing. The flag tells whether
+/// `max_trials` cut the count short.
 pub fn path_photon(
     scene: &Scene,
     state: &PathState,
     max_edges: usize,
     max_trials: u64,
+    successes: u64,
     seed: u64,
     scratch: &mut Vec<Vertex>,
 ) -> Option<(StoragePoint, Photon, bool)> {
@@ -201,19 +204,22 @@ pub fn path_photon(
     }
     let v = &prefix[j];
     let beta = v.beta;
-    // T: continuations until one lands in Q (deterministic in the path: seeded by its hash).
+    // 1/A: continuations drawn until `successes` land in Q (deterministic in the path: seeded by
+    // its hash); (N − 1)/(r − 1) is unbiased for r ≥ 2 (negative binomial), N itself for r = 1.
     let mut rng = mcmc_core::rng::stream(seed, path_hash(path));
     let global = matches!(at, StoragePoint::Global(_));
-    let mut trials = 0u64;
-    let mut capped = true;
-    while trials < max_trials {
+    let (mut trials, mut hits) = (0u64, 0u64);
+    while trials < max_trials && hits < successes {
         trials += 1;
-        if continuation_succeeds(scene, &prefix, global, max_edges, &mut rng, scratch) {
-            capped = false;
-            break;
-        }
+        hits += continuation_succeeds(scene, &prefix, global, max_edges, &mut rng, scratch) as u64;
     }
-    let power = beta * (i_state * trials as f64 / i_t1);
+    let capped = hits < successes;
+    let inverse_a = match successes {
+        0 => 1.0, // MpsDefect::WithoutContinuationProbability
+        1 => trials as f64,
+        r => (trials - 1) as f64 / (r - 1) as f64,
+    };
+    let power = beta * (i_state * inverse_a / i_t1);
     if !power.is_finite() || power.is_black() {
         return None;
     }
@@ -264,6 +270,7 @@ pub struct PhotonChunk<'a> {
     scene: Option<&'a Scene>,
     max_edges: usize,
     max_trials: u64,
+    successes: u64,
     seed: u64,
     /// Per path: the photon (unit power), its map, and whether `T` was capped.
     paths: HashMap<u64, Option<(bool, Photon)>>,
@@ -280,6 +287,7 @@ impl Default for PhotonChunk<'_> {
             scene: None,
             max_edges: 0,
             max_trials: 0,
+            successes: 1,
             seed: 0,
             paths: HashMap::new(),
             photons: HashMap::new(),
@@ -299,11 +307,20 @@ impl Recorder<PathState> for PhotonChunk<'_> {
             return;
         }
         let h = path_hash(&state.path);
-        let (max_edges, max_trials, seed) = (self.max_edges, self.max_trials, self.seed);
+        let (max_edges, max_trials, successes, seed) =
+            (self.max_edges, self.max_trials, self.successes, self.seed);
         let entry = match self.paths.get(&h) {
             Some(e) => *e,
             None => {
-                let e = path_photon(scene, state, max_edges, max_trials, seed, &mut self.scratch)
+                let e = path_photon(
+                    scene,
+                    state,
+                    max_edges,
+                    max_trials,
+                    successes,
+                    seed,
+                    &mut self.scratch,
+                )
                     .map(|(at, photon, capped)| {
                         self.capped += capped as u64;
                         (matches!(at, StoragePoint::Caustic(_)), photon)
@@ -329,6 +346,7 @@ pub struct PhotonSink<'a> {
     scene: &'a Scene,
     max_edges: usize,
     max_trials: u64,
+    successes: u64,
     seed: u64,
     photons: HashMap<[u64; 7], (bool, Photon)>,
     mutations: u64,
@@ -344,6 +362,7 @@ impl<'a> Sink<PathState> for PhotonSink<'a> {
             scene: Some(self.scene),
             max_edges: self.max_edges,
             max_trials: self.max_trials,
+            successes: self.successes,
             seed: self.seed,
             ..Default::default()
         }
@@ -372,9 +391,65 @@ pub struct MpsSettings {
     pub metropolis: MetropolisSettings,
     /// The final gather (the photon counts are unused).
     pub gather: PhotonMapping,
-    /// Most continuations drawn for `T` (a photon whose count reaches it is kept with `T` at the
-    /// cap — biased low — and counted).
+    /// Continuations that must land in `Q` before a photon's `1/A` is estimated (`r`; the
+    /// estimate `(N − 1)/(r − 1)` from the `N` drawn has relative variance about `(1 − A)/(r − 2)`).
+    pub continuations: u64,
+    /// Most continuations drawn per photon (one whose count reaches it keeps the estimate at the
+    /// cap — biased low — and is counted).
     pub max_trials: u64,
+    /// A deliberate defect (tests of the tests only).
+    pub defect: Option<MpsDefect>,
+}
+
+/// Deliberately wrong photon powers, kept to show that the tests catch them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MpsDefect {
+    /// `1/A = 1`: the photon power without the inverse continuation probability.
+    WithoutContinuationProbability,
+}
+
+impl MpsSettings {
+    /// Defaults for paths of at most `max_edges` edges: 1000 chains, 100 000 bootstrap samples per
+    /// path length, 4 mutations per pixel, the final gather's defaults, at most 10 000
+    /// continuations per photon.
+    pub fn new(max_edges: usize) -> Self {
+        Self {
+            metropolis: MetropolisSettings {
+                budget: crate::Budget::SamplesPerPixel(4.0),
+                ..MetropolisSettings::default()
+            },
+            gather: PhotonMapping::new(max_edges),
+            continuations: 4,
+            max_trials: 10_000,
+            defect: None,
+        }
+    }
+}
+
+/// The paper's proposal probabilities without user paths (its Lantern scene): bidirectional 0.4,
+/// photon map 0.2, lens 0.2, lens subpath 0.2.
+pub fn proposals() -> MutationProbabilities {
+    MutationProbabilities::of(&[
+        ("bidirectional", 0.4),
+        ("photon-map", 0.2),
+        ("lens", 0.2),
+        ("lens-subpath", 0.2),
+    ])
+    .unwrap_or_default()
+}
+
+/// The paper's proposal probabilities with user paths (its Box scene): user path 0.1,
+/// bidirectional 0.3, photon map 0.2, caustic 0.12, lens 0.08, lens subpath 0.2.
+pub fn proposals_with_user_paths() -> MutationProbabilities {
+    MutationProbabilities::of(&[
+        ("user-path", 0.1),
+        ("bidirectional", 0.3),
+        ("photon-map", 0.2),
+        ("caustic", 0.12),
+        ("lens", 0.08),
+        ("lens-subpath", 0.2),
+    ])
+    .unwrap_or_default()
 }
 
 /// What Metropolis photon sampling did.
@@ -434,6 +509,11 @@ pub fn sample_photons(
         scene,
         max_edges: method.mutations.max_edges,
         max_trials: settings.max_trials.max(1),
+        successes: if settings.defect == Some(MpsDefect::WithoutContinuationProbability) {
+            0
+        } else {
+            settings.continuations.max(1)
+        },
         seed: settings.metropolis.seed ^ 0x3F5,
         photons: HashMap::new(),
         mutations: 0,

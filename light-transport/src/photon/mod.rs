@@ -13,5 +13,5 @@ pub mod trace;
 
 pub use map::{Lookup, Photon, PhotonMap};
 pub use mapper::{PhotonMapper, PhotonMapping};
-pub use metropolis::{MpsSettings, MpsStats, mps_mapper, sample_photons};
+pub use metropolis::{MpsDefect, MpsSettings, MpsStats, mps_mapper, sample_photons};
 pub use trace::trace_photons;

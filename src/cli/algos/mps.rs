@@ -35,8 +35,13 @@ pub struct MpsArgs {
     /// Metropolis photon sampling: cone half-angle γ of the photon-map proposal (degrees).
     #[arg(long, default_value_t = 30.0)]
     pub photon_map_gamma: f64,
-    /// Metropolis photon sampling: most light-walk continuations drawn per photon to estimate
-    /// 1/A (photons reaching it are counted; their power is biased low).
+    /// Metropolis photon sampling: light-walk continuations from a photon's storage point that
+    /// must reach the eye before its inverse continuation probability 1/A is estimated (r ≥ 2:
+    /// (N − 1)/(r − 1) over the N drawn, unbiased; larger r, less variance, more rays).
+    #[arg(long, default_value_t = 4)]
+    pub continuations: u64,
+    /// Metropolis photon sampling: most continuations drawn per photon (photons reaching it are
+    /// counted; their power is biased low).
     #[arg(long, default_value_t = 10_000)]
     pub continuation_cap: u64,
 }
@@ -48,12 +53,7 @@ pub const ENTRY: Entry = Entry {
     unbiased: false,
     build: |scene, c, a| {
         let p = &a.mps;
-        let lantern = MutationProbabilities::of(&[
-            ("bidirectional", 0.4),
-            ("photon-map", 0.2),
-            ("lens", 0.2),
-            ("lens-subpath", 0.2),
-        ])?;
+        let lantern = light_transport::photon::metropolis::proposals();
         let explicit = p.mps_proposals.is_some();
         let mut mutations = a.pathspace.mutations(c, &a.metropolis, &lantern)?;
         if let Some(given) = &p.mps_proposals {
@@ -69,14 +69,8 @@ pub const ENTRY: Entry = Entry {
             })?;
             mutations.photon.user_paths = Arc::new(paths);
             if !explicit {
-                mutations.probabilities = MutationProbabilities::of(&[
-                    ("user-path", 0.1),
-                    ("bidirectional", 0.3),
-                    ("photon-map", 0.2),
-                    ("caustic", 0.12),
-                    ("lens", 0.08),
-                    ("lens-subpath", 0.2),
-                ])?;
+                mutations.probabilities =
+                    light_transport::photon::metropolis::proposals_with_user_paths();
             }
         }
         mutations.validate()?;
@@ -94,7 +88,9 @@ pub const ENTRY: Entry = Entry {
                 ..a.metropolis.settings()
             },
             gather,
+            continuations: p.continuations,
             max_trials: p.continuation_cap,
+            defect: None,
         };
         let method = PathMlt::new(mutations)?;
         let start = Instant::now();
