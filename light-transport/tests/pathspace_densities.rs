@@ -1294,7 +1294,8 @@ fn t_user_path(f: &Fixture, from: &[Vertex], to: &[Vertex], c: Change) -> f64 {
         for j in 0..m {
             let w = dir(&to[j], &to[j + 1]);
             let d2 = (to[j + 1].p() - to[j].p()).length_squared();
-            t *= cone_density((u[j + 1] - to[j].p()).normalize(), w, beta[j]) * cos_at(f, &to[j + 1], w)
+            t *= cone_density((u[j + 1] - to[j].p()).normalize(), w, beta[j])
+                * cos_at(f, &to[j + 1], w)
                 / d2;
         }
         sum += t;
@@ -1343,7 +1344,8 @@ fn pointwise_user_path_hybrid() {
         m.validate().expect("valid");
         let mixture = m.proposal(&f.scene, np.clone()).expect("mixture");
         let currents = current_paths();
-        let (mut compared, mut bad, mut up_compared, mut up_finite, mut up_proposed) = (0, 0, 0, 0, 0);
+        let (mut compared, mut bad, mut up_compared, mut up_finite, mut up_proposed) =
+            (0, 0, 0, 0, 0);
         let (mut proposals, mut worst) = (0usize, 0.0f64);
         let mut y = PathState::default();
         while compared < WANT && proposals < 100 * WANT {
@@ -1356,7 +1358,13 @@ fn pointwise_user_path_hybrid() {
             }
             let c = y.change.expect("a record");
             let (xv, yv) = (&x.path.vertices, &y.path.vertices);
-            let mine = ln_ratio(f, xv, yv, t_hybrid(f, xv, yv, c), t_hybrid(f, yv, xv, c.reverse()));
+            let mine = ln_ratio(
+                f,
+                xv,
+                yv,
+                t_hybrid(f, xv, yv, c),
+                t_hybrid(f, yv, xv, c.reverse()),
+            );
             let up = p.kind == 1;
             up_proposed += up as usize;
             up_finite += (up && p.ln_ratio.is_finite()) as usize;
@@ -1389,7 +1397,10 @@ fn pointwise_user_path_hybrid() {
         println!(
             "{rule:?}: {proposals} proposals, {compared} compared ({up_compared} user-path moves), {bad} disagree with eq. 7 (max |Δ| {worst:.2e} where finite); user-path moves with a finite ratio: {up_finite} of {up_proposed}"
         );
-        assert!(compared >= WANT && up_compared >= 200, "too few comparisons");
+        assert!(
+            compared >= WANT && up_compared >= 200,
+            "too few comparisons"
+        );
         match rule {
             UserPathRule::Hybrid => assert_eq!(bad, 0, "the hybrid's ratios differ from eq. 7"),
             UserPathRule::PerComponent => {
@@ -1855,7 +1866,10 @@ fn photon_map_estimate() -> &'static Estimate {
         let f = fx();
         let x = fixed_k3();
         let xv = x.path.vertices.clone();
-        let patch = Patch::floor([P1_K3.x - 0.15, P1_K3.x + 0.25], [P1_K3.z - 0.2, P1_K3.z + 0.2]);
+        let patch = Patch::floor(
+            [P1_K3.x - 0.15, P1_K3.x + 0.25],
+            [P1_K3.z - 0.2, P1_K3.z + 0.2],
+        );
         for c in patch.corners() {
             let (a, b) = ((P1_K3 - P2_K3).normalize(), (c - P2_K3).normalize());
             let theta = a.cross(b).length().atan2(a.dot(b));

@@ -25,7 +25,11 @@ const LO: DVec3 = DVec3::new(-0.8, 0.2, -1.01);
 const HI: DVec3 = DVec3::new(0.8, 1.8, -0.99);
 
 fn scene() -> Scene {
-    Scene::new(&builtin::builtin("cornell").expect("cornell"), Some((24, 24))).expect("scene")
+    Scene::new(
+        &builtin::builtin("cornell").expect("cornell"),
+        Some((24, 24)),
+    )
+    .expect("scene")
 }
 
 fn mean_var(x: &[f64]) -> (f64, f64) {
@@ -79,7 +83,10 @@ fn mps_photon_power_matches_light_tracing_flux() {
     let (m, _) = mean_var(&mps);
     let (l, _) = mean_var(&lt);
     println!("runs {mps:.3?}\nlt {lt:.3?}");
-    println!("patch flux: MPS {m:.5e}, light tracing {l:.5e}, ratio {:.4}, t = {t:.2}", m / l);
+    println!(
+        "patch flux: MPS {m:.5e}, light tracing {l:.5e}, ratio {:.4}, t = {t:.2}",
+        m / l
+    );
     assert!(t.abs() < 5.0, "MPS photon power is biased: t = {t:.2}");
 }
 
@@ -89,14 +96,16 @@ fn mps_without_the_continuation_probability_is_caught() {
     let lt = light_tracing_batches(&scene);
     let mps: Vec<f64> = (1..=RUNS)
         .map(|s| {
-            mps_patch_power(&scene, s, Some(MpsDefect::WithoutContinuationProbability))
-                .luminance()
+            mps_patch_power(&scene, s, Some(MpsDefect::WithoutContinuationProbability)).luminance()
         })
         .collect();
     let t = t_statistic(&mps, &lt);
     let (m, _) = mean_var(&mps);
     let (l, _) = mean_var(&lt);
-    println!("defect T = 1: MPS {m:.5e}, light tracing {l:.5e}, ratio {:.4}, t = {t:.2}", m / l);
+    println!(
+        "defect T = 1: MPS {m:.5e}, light tracing {l:.5e}, ratio {:.4}, t = {t:.2}",
+        m / l
+    );
     assert!(t.abs() >= 5.0, "the defect was not caught: t = {t:.2}");
 }
 
@@ -117,7 +126,8 @@ fn diagnose_power_distribution() {
         },
         ..MpsSettings::new(K)
     };
-    let (global, _, st) = sample_photons(&scene, &method, &settings, None, |_, _| true).expect("mps");
+    let (global, _, st) =
+        sample_photons(&scene, &method, &settings, None, |_, _| true).expect("mps");
     let mut p: Vec<(f64, DVec3)> = global
         .iter()
         .filter(|p| p.p.cmpge(LO).all() && p.p.cmple(HI).all())
@@ -125,7 +135,11 @@ fn diagnose_power_distribution() {
         .collect();
     p.sort_by(|a, b| b.0.partial_cmp(&a.0).unwrap());
     let total: f64 = p.iter().map(|x| x.0).sum();
-    println!("{} photons in patch, total {total:.4}, {:?}", p.len(), st.summary());
+    println!(
+        "{} photons in patch, total {total:.4}, {:?}",
+        p.len(),
+        st.summary()
+    );
     for x in p.iter().take(10) {
         println!("{:.5} ({:.2}%) at {:.3?}", x.0, 100.0 * x.0 / total, x.1);
     }

@@ -213,6 +213,11 @@ pub enum UserPathRule {
     /// user path its candidates can never be accepted (the reverse move is impossible). Kept to
     /// show it.
     PerComponent,
+    /// Deliberately wrong (a test of the tests): user-path candidates accepted with the
+    /// bidirectional mutation's ratio `T_BD(x̄|ȳ) / T_BD(ȳ|x̄)` — a reading of the paper's remark
+    /// that the bidirectional mutation can make any path, which ignores how concentrated the
+    /// user-path proposal is (eq. 7 weighs both densities).
+    BidirectionalRatio,
 }
 
 /// Settings of the proposals of Metropolis photon sampling (Fan, Chenney & Lai 2005, §5).
@@ -386,13 +391,21 @@ impl Mutations {
             name: "mutation probabilities".into(),
             reason: e.to_string(),
         };
+        let reversed = self.photon.user_path_rule == UserPathRule::BidirectionalRatio;
         let mut components: Vec<(f64, Component<'a>)> = REGISTRY
             .iter()
             .zip(&self.probabilities.0)
             .enumerate()
             .map(|(i, (r, &w))| {
+                let mut mutation = (r.build)(&context);
+                if reversed && i == REGISTRY_USER_PATH {
+                    mutation = Box::new(super::user_path::BidirectionalRatio {
+                        user_path: mutation,
+                        bidirectional: (REGISTRY[0].build)(&context),
+                    });
+                }
                 let p: Component<'a> = Box::new(MutationProposal {
-                    mutation: (r.build)(&context),
+                    mutation,
                     index: Some(i),
                 });
                 (w, p)

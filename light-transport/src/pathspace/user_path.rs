@@ -507,3 +507,42 @@ impl Mutation for UserPathProposal<'_> {
         }
     }
 }
+
+/// The deliberately wrong mix [`super::UserPathRule::BidirectionalRatio`]: user-path moves
+/// accepted with `T̃_BD(x̄|ȳ) / T̃_BD(ȳ|x̄)`.
+pub(super) struct BidirectionalRatio<'a> {
+    pub(super) user_path: Box<dyn Mutation + 'a>,
+    pub(super) bidirectional: Box<dyn Mutation + 'a>,
+}
+
+impl Mutation for BidirectionalRatio<'_> {
+    fn name(&self) -> &'static str {
+        self.user_path.name()
+    }
+
+    fn suitability(&self, x: &PathState) -> f64 {
+        self.user_path.suitability(x)
+    }
+
+    fn propose(&self, x: &PathState, rng: &mut ChainRng, y: &mut PathState) -> Result<(), Failure> {
+        self.user_path.propose(x, rng, y)
+    }
+
+    fn ln_density(&self, x: &PathState, y: &PathState, change: Change) -> f64 {
+        self.user_path.ln_density(x, y, change)
+    }
+
+    fn ln_ratio(&self, x: &PathState, y: &PathState) -> f64 {
+        let Some(c) = y.change else {
+            return f64::NEG_INFINITY;
+        };
+        if !y.carries_light() {
+            return f64::NEG_INFINITY;
+        }
+        let fwd = self.bidirectional.ln_density(x, y, c);
+        if !(fwd > f64::NEG_INFINITY) {
+            return f64::NEG_INFINITY;
+        }
+        self.bidirectional.ln_density(y, x, c.reverse()) - fwd
+    }
+}

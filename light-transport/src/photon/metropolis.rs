@@ -321,10 +321,10 @@ impl Recorder<PathState> for PhotonChunk<'_> {
                     seed,
                     &mut self.scratch,
                 )
-                    .map(|(at, photon, capped)| {
-                        self.capped += capped as u64;
-                        (matches!(at, StoragePoint::Caustic(_)), photon)
-                    });
+                .map(|(at, photon, capped)| {
+                    self.capped += capped as u64;
+                    (matches!(at, StoragePoint::Caustic(_)), photon)
+                });
                 self.paths.insert(h, e);
                 e
             }
