@@ -52,7 +52,7 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Render a scene (a pbrt-v3 file or a built-in scene: cornell, caustic, door, ring, pool, pool-lamp).
+    /// Render a scene (a pbrt-v3 file or a built-in scene: cornell, caustic, door, ring, pool, pool-lamp, rooms, lantern, box).
     Render(render::RenderArgs),
     /// Render a long reference image with an unbiased algorithm (default: BDPT, 1024 spp).
     Reference(reference::ReferenceArgs),

@@ -16,7 +16,7 @@ use std::time::{Duration, Instant};
 /// Options of `render`.
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Scene: a built-in name (cornell, caustic, door, ring, pool, pool-lamp) or a pbrt-v3 file.
+    /// Scene: a built-in name (cornell, caustic, door, ring, pool, pool-lamp, rooms, lantern, box) or a pbrt-v3 file.
     #[arg(default_value = "cornell")]
     pub scene: String,
     /// Algorithm.

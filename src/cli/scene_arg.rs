@@ -29,7 +29,7 @@ pub fn load(arg: &str) -> Result<Loaded, CliError> {
     if !path.exists() {
         return Err(CliError::Usage(format!(
             "no scene {arg:?}: not a file and not a built-in scene (built-in: {})",
-            builtin::BUILTIN.join(", ")
+            builtin::all().join(", ")
         )));
     }
     let description = light_transport::scene::pbrt::load(path)?;

@@ -38,7 +38,7 @@ use super::perturbation::{branch_probability, bsdf_pdf, direction, refracts, sca
 use super::state::PathState;
 use super::walk::{cone_direction, cone_pdf, endpoint, trace};
 use crate::bsdf::TransportMode;
-use crate::geometry::{Ray, offset_origin};
+use crate::geometry::Ray;
 use crate::light::LightKind;
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
@@ -232,12 +232,7 @@ fn resolve(r: &RawPath, scene: &Scene) -> Result<UserPath, (usize, String)> {
             return Err((line, "this point coincides with the previous one".into()));
         }
         let w = (b - a) / dist;
-        let o = if j == 0 {
-            a + w * tol
-        } else {
-            offset_origin(a, w, w)
-        };
-        let hit = scene.intersect(&Ray::new(o, w));
+        let hit = scene.intersect(&Ray::new(a + w * tol, w));
         match hit {
             Some(h) if (h.point.p - b).length() <= 10.0 * tol + 1e-6 * dist => surfaces.push(h),
             Some(h) => {
@@ -264,7 +259,7 @@ fn resolve(r: &RawPath, scene: &Scene) -> Result<UserPath, (usize, String)> {
     let line0 = r.points[0].2;
     let light = {
         let w = (pts[0] - pts[1]).normalize();
-        let hit = scene.intersect(&Ray::new(offset_origin(pts[1], w, w), w));
+        let hit = scene.intersect(&Ray::new(pts[1] + w * tol, w));
         let area = hit
             .filter(|h| (h.point.p - pts[0]).length() <= 10.0 * tol)
             .and_then(|h| scene.light_at(h.point.primitive).map(|l| l.0));

@@ -487,12 +487,23 @@ impl MpsStats {
                 self.photons.1,
                 self.deposits,
                 if self.capped > 0 {
-                    format!(", {} with T at the cap (biased low)", self.capped)
+                    format!(", {} with 1/A at the continuation cap (biased low)", self.capped)
                 } else {
                     String::new()
                 }
             ),
         ]
+        .into_iter()
+        .chain(
+            self.chains
+                .stats
+                .table(&self.chains.kinds)
+                .to_string()
+                .lines()
+                .filter(|l| !l.trim().is_empty())
+                .map(|l| format!("mps        {l}")),
+        )
+        .collect()
     }
 }
 

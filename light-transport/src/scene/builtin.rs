@@ -14,14 +14,26 @@
 //!   from above the water: the floor's caustic is seen through the surface, `L S D S E` paths (the
 //!   specular-chain case of manifold exploration);
 //! * `pool-lamp` — the same pool lit also by a small lamp under water on the far wall, itself seen
-//!   through the surface (`L S E`, and `L D S E` light on the floor).
+//!   through the surface (`L S E`, and `L D S E` light on the floor);
+//! * `rooms`, `lantern`, `box` — the situations of Metropolis photon sampling
+//!   ([`super::photon_scenes`]).
 
 use super::description::*;
 use crate::math::{DMat4, DVec3};
 use crate::spectrum::Rgb;
 
-/// Names of the built-in scenes.
+/// Names of the built-in scenes the Metropolis methods' convergence tests cover.
 pub const BUILTIN: [&str; 6] = ["cornell", "caustic", "door", "ring", "pool", "pool-lamp"];
+
+/// Every built-in scene: [`BUILTIN`] and the photon-mapping scenes
+/// ([`super::photon_scenes::PHOTON_SCENES`]).
+pub fn all() -> Vec<&'static str> {
+    BUILTIN
+        .iter()
+        .chain(super::photon_scenes::PHOTON_SCENES.iter())
+        .copied()
+        .collect()
+}
 
 /// The built-in scene called `name`.
 pub fn builtin(name: &str) -> Option<SceneDescription> {
@@ -32,6 +44,9 @@ pub fn builtin(name: &str) -> Option<SceneDescription> {
         "ring" => Some(ring()),
         "pool" => Some(pool(false)),
         "pool-lamp" => Some(pool(true)),
+        "rooms" => Some(super::photon_scenes::rooms()),
+        "lantern" => Some(super::photon_scenes::lantern()),
+        "box" => Some(super::photon_scenes::mirror_box()),
         _ => None,
     }
 }
@@ -690,7 +705,7 @@ mod tests {
 
     #[test]
     fn every_builtin_builds() {
-        for name in BUILTIN {
+        for name in all() {
             let d = builtin(name).unwrap();
             crate::scene::Scene::new(&d, Some((32, 24))).unwrap_or_else(|e| panic!("{name}: {e}"));
         }
