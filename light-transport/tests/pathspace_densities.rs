@@ -1407,6 +1407,7 @@ fn pointwise_user_path_hybrid() {
                 assert!(bad >= 200, "the per-component rule was not caught ({bad})");
                 assert_eq!(up_finite, 0, "a user-path move reversed itself");
             }
+            UserPathRule::BidirectionalRatio => unreachable!("not run here"),
         }
     }
 }

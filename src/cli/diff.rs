@@ -45,8 +45,8 @@ pub fn run(a: DiffArgs) -> Result<(), CliError> {
     let m = metrics(&img, &reference)?;
     let (mi, mr) = (img.mean(), reference.mean());
     println!(
-        "RMSE {:.5e}  MSE {:.5e}  relMSE {:.5e}  MAE {:.5e}",
-        m.rmse, m.mse, m.rel_mse, m.mae
+        "RMSE {:.5e}  MSE {:.5e}  relMSE {:.5e}  MAE {:.5e}  E_rms {:.5}",
+        m.rmse, m.mse, m.rel_mse, m.mae, m.rel_luminance_rms
     );
     println!(
         "mean image {:.5} {:.5} {:.5}; reference {:.5} {:.5} {:.5}; ratio {:.4} {:.4} {:.4}",

@@ -16,6 +16,9 @@ pub struct ErrorMetrics {
     pub rel_mse: f64,
     /// Mean absolute error.
     pub mae: f64,
+    /// The RMS over pixels of the relative luminance error `E = (I − I_ref)/I_ref` (Fan, Chenney &
+    /// Lai 2005, §6), over the pixels whose reference luminance is positive.
+    pub rel_luminance_rms: f64,
 }
 
 fn check(a: &Image, r: &Image) -> Result<()> {
@@ -36,6 +39,7 @@ pub fn metrics(image: &Image, reference: &Image) -> Result<ErrorMetrics> {
     check(image, reference)?;
     let n = (image.pixels.len() * 3) as f64;
     let (mut se, mut rel, mut ae) = (0.0, 0.0, 0.0);
+    let (mut lum, mut lit) = (0.0, 0usize);
     for (a, r) in image.pixels.iter().zip(&reference.pixels) {
         for c in 0..3 {
             let d = a[c] - r[c];
@@ -43,12 +47,18 @@ pub fn metrics(image: &Image, reference: &Image) -> Result<ErrorMetrics> {
             rel += d * d / (r[c] * r[c] + 0.01);
             ae += d.abs();
         }
+        let yr = r.luminance();
+        if yr > 0.0 {
+            lum += ((a.luminance() - yr) / yr).powi(2);
+            lit += 1;
+        }
     }
     Ok(ErrorMetrics {
         mse: se / n,
         rmse: (se / n).sqrt(),
         rel_mse: rel / n,
         mae: ae / n,
+        rel_luminance_rms: (lum / lit.max(1) as f64).sqrt(),
     })
 }
 

@@ -95,11 +95,14 @@ impl PhotonMapper {
     pub fn new(scene: &Scene, settings: PhotonMapping) -> Result<Self, PhotonMappingError> {
         Self::check(&settings)?;
         let s = &settings;
+        let t = std::time::Instant::now();
         let (global, _) = trace_photons(scene, s.global_paths, s.max_edges, s.seed);
         let (_, caustic) = trace_photons(scene, s.caustic_paths, s.max_edges, s.seed ^ 0xCA05);
         let notes = vec![format!(
-            "photons    traced: {} paths for the global map, {} for the caustic map",
-            s.global_paths, s.caustic_paths
+            "photons    traced: {} paths for the global map, {} for the caustic map, t_map {:.2} s",
+            s.global_paths,
+            s.caustic_paths,
+            t.elapsed().as_secs_f64()
         )];
         Self::from_photons(scene, settings, global, caustic, notes)
     }

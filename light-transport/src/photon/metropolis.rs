@@ -21,18 +21,18 @@
 //! `Q(x̄_map)` of continuations that make a storing path carrying light, of probability
 //! `A(x̄_map)`. Then
 //!
-//! `Φ = (B / N) · f_map w / (I(f_eye) A) = (B / N) · β_L(x_j) · T / I(C*_{k}(x̄))`,
+//! `Φ = (B / N) · f_map w / (I(f_eye) A) = (B / N) · β_L(x_j) · Â⁻¹ / I(C*_{k}(x̄))`,
 //!
 //! with `β_L(x_j)` the light subpath's throughput arriving at `x_j` (what a photon tracer stores),
-//! `C*_k` the path's `t = 1` strategy ratio (the chain's state holds it), and `T` the number of
-//! independent continuations drawn until one lies in `Q` — geometrically distributed with mean
-//! `1/A`, an unbiased estimate of `1/A` (Qin et al. 2015 use the same counting estimator for
-//! inverse probabilities). Then `E[Σ_R Φ] = ∫_{Ω_R} f_map dμ` for every region `R` of storage
-//! points with `A > 0`: the photon map is a particle map as a light tracer's is, but only where a
-//! gather can read it. For caustic photons on a pinhole camera `A ∈ {0, 1}` and `T = 1`.
-//! Consequences: eye subpaths through specular surfaces before `x_d` (a diffuse point seen in a
-//! mirror) have `w = 0` and store nothing; a point that a gather reaches only through such a view
-//! gets no photons.
+//! `C*_k` the path's `t = 1` strategy ratio (the chain's state holds it), and `Â⁻¹` an unbiased
+//! estimate of `1/A`: continuations are drawn independently until `r` of them land in `Q`, and
+//! with `N` drawn, `(N − 1)/(r − 1)` has mean `1/A` (negative binomial; `r = 4` by default, relative
+//! variance about `(1 − A)/(r − 2)`; Qin et al. 2015 use the `r = 1` count for inverse
+//! probabilities). Then `E[Σ_R Φ] = ∫_{Ω_R} f_map dμ` for every region `R` of storage points with
+//! `A > 0`: the photon map is a particle map as a light tracer's is, but only where a gather can
+//! read it. For caustic photons on a pinhole camera `A ∈ {0, 1}`. Consequences: eye subpaths
+//! through specular surfaces before `x_d` (a diffuse point seen in a mirror) have `w = 0` and store
+//! nothing; a point that a gather reaches only through such a view gets no photons.
 //!
 //! **Recording.** Every proposal deposits `1 − a` times the current path's photon and `a` times the
 //! candidate's (the expected values of §6). A path's photon is computed once per chunk and its
@@ -272,7 +272,7 @@ pub struct PhotonChunk<'a> {
     max_trials: u64,
     successes: u64,
     seed: u64,
-    /// Per path: the photon (unit power), its map, and whether `T` was capped.
+    /// Per path: the photon (unit power), its map, and whether its `1/A` count was cut at the cap.
     paths: HashMap<u64, Option<(bool, Photon)>>,
     /// Accumulated photons by storage key.
     photons: HashMap<[u64; 7], (bool, Photon)>,
@@ -465,7 +465,7 @@ pub struct MpsStats {
     pub photons: (usize, usize),
     /// Deposits (path photons recorded with positive weight).
     pub deposits: u64,
-    /// Photons whose `T` reached the cap.
+    /// Photons whose `1/A` count reached the cap.
     pub capped: u64,
 }
 

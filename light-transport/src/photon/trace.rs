@@ -100,43 +100,67 @@ pub fn trace_photons(
     max_edges: usize,
     seed: u64,
 ) -> (Vec<Photon>, Vec<Photon>) {
-    let (mut global, mut caustic) = (Vec::new(), Vec::new());
-    let mut path = Vec::new();
+    use rayon::prelude::*;
+    const CHUNK: u64 = 4096;
     let scale = 1.0 / paths.max(1) as f64;
     let strata = Strata::new(paths as usize, seed);
-    for i in 0..paths {
-        let mut stream = StratifiedStream {
-            inner: IndependentStream::new(mcmc_core::rng::stream(seed, i)),
-            strata: &strata,
-            i: i as usize,
-            current: 0,
-        };
-        light_subpath(scene, &mut stream, max_edges, &mut path);
-        for (j, v) in path.iter().enumerate().skip(1) {
-            if v.kind != VertexKind::Surface || !v.connectible() {
-                continue;
+    // Chunks in parallel, concatenated in order: the same photons for any thread count.
+    let chunks: Vec<(Vec<Photon>, Vec<Photon>)> = (0..paths.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let (mut global, mut caustic) = (Vec::new(), Vec::new());
+            let mut path = Vec::new();
+            for i in c * CHUNK..((c + 1) * CHUNK).min(paths) {
+                let mut stream = StratifiedStream {
+                    inner: IndependentStream::new(mcmc_core::rng::stream(seed, i)),
+                    strata: &strata,
+                    i: i as usize,
+                    current: 0,
+                };
+                light_subpath(scene, &mut stream, max_edges, &mut path);
+                store(&path, scale, &mut global, &mut caustic);
             }
-            let power = v.beta * scale;
-            if power.is_black() || !power.is_finite() {
-                continue;
-            }
-            let wi = v.wo;
-            let n = if v.point.n.dot(wi) >= 0.0 {
-                v.point.n
-            } else {
-                -v.point.n
-            };
-            let photon = Photon {
-                p: v.p(),
-                wi,
-                power,
-                n,
-            };
-            global.push(photon);
-            if j >= 2 && path[1..j].iter().all(|u| u.delta) {
-                caustic.push(photon);
-            }
-        }
+            (global, caustic)
+        })
+        .collect();
+    let (mut global, mut caustic) = (Vec::new(), Vec::new());
+    for (g, c) in chunks {
+        global.extend(g);
+        caustic.extend(c);
     }
     (global, caustic)
+}
+
+/// The photons of one light subpath.
+fn store(
+    path: &[crate::path::Vertex],
+    scale: f64,
+    global: &mut Vec<Photon>,
+    caustic: &mut Vec<Photon>,
+) {
+    for (j, v) in path.iter().enumerate().skip(1) {
+        if v.kind != VertexKind::Surface || !v.connectible() {
+            continue;
+        }
+        let power = v.beta * scale;
+        if power.is_black() || !power.is_finite() {
+            continue;
+        }
+        let wi = v.wo;
+        let n = if v.point.n.dot(wi) >= 0.0 {
+            v.point.n
+        } else {
+            -v.point.n
+        };
+        let photon = Photon {
+            p: v.p(),
+            wi,
+            power,
+            n,
+        };
+        global.push(photon);
+        if j >= 2 && path[1..j].iter().all(|u| u.delta) {
+            caustic.push(photon);
+        }
+    }
 }
