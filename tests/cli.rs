@@ -145,6 +145,39 @@ fn every_subcommand_runs_on_a_tiny_image() {
         &o("pm-bad.exr"),
     ]));
     assert!(!ok && e.contains("k ≥ 2"), "{e}");
+    // Metropolis photon sampling with the shipped user paths of `box`; a bad user-path file is an
+    // error naming its line.
+    let (ok, out, e) = run(charted().args([
+        "render",
+        "box",
+        "--algo",
+        "mps",
+        "--spp",
+        "1",
+        "--resolution",
+        "24x24",
+        "--photon-mutations",
+        "8",
+        "--chains",
+        "16",
+        "--bootstrap",
+        "500",
+        "--user-paths",
+        concat!(env!("CARGO_MANIFEST_DIR"), "/examples/box.user-paths"),
+        "-o",
+        &o("mps.exr"),
+    ]));
+    assert!(
+        ok && out.contains("t_B") && out.contains("user-path") && out.contains("bytes per photon"),
+        "{out}{e}"
+    );
+    let bad = o("bad.user-paths");
+    std::fs::write(&bad, "path\n0 1.98 0\n0.5 0 0.5 400\n").expect("write");
+    let (ok, _, e) = run(charted().args([
+        "render", "box", "--algo", "mps", "--spp", "1", "--resolution", "8x8", "--user-paths",
+        &bad, "-o", &o("mps-bad.exr"),
+    ]));
+    assert!(!ok && e.contains("bad.user-paths:3:"), "{e}");
     let (ok, _, e) = run(charted().args([
         "render",
         "caustic",
