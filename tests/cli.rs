@@ -174,8 +174,18 @@ fn every_subcommand_runs_on_a_tiny_image() {
     let bad = o("bad.user-paths");
     std::fs::write(&bad, "path\n0 1.98 0\n0.5 0 0.5 400\n").expect("write");
     let (ok, _, e) = run(charted().args([
-        "render", "box", "--algo", "mps", "--spp", "1", "--resolution", "8x8", "--user-paths",
-        &bad, "-o", &o("mps-bad.exr"),
+        "render",
+        "box",
+        "--algo",
+        "mps",
+        "--spp",
+        "1",
+        "--resolution",
+        "8x8",
+        "--user-paths",
+        &bad,
+        "-o",
+        &o("mps-bad.exr"),
     ]));
     assert!(!ok && e.contains("bad.user-paths:3:"), "{e}");
     let (ok, _, e) = run(charted().args([

@@ -134,6 +134,11 @@ pub fn scatters_diffusely(v: &Vertex) -> bool {
     v.bsdf.as_ref().is_some_and(|b| !b.is_delta_only())
 }
 
+/// Whether `v` only scatters specularly (every lobe of its BSDF is a delta lobe).
+pub fn specular_only(v: &Vertex) -> bool {
+    v.bsdf.as_ref().is_some_and(|b| b.is_delta_only())
+}
+
 /// Whether two paths follow the same specular structure over vertices `range`: the same vertices
 /// are specular, and those reflect or refract alike.
 pub fn same_specular_structure(x: &FullPath, y: &FullPath, range: std::ops::Range<usize>) -> bool {

@@ -21,7 +21,7 @@
 //! directions here (`θ` is the angle between the same two directions).
 
 use super::mutation::{Change, Mutation, Registration};
-use super::perturbation::{bsdf_pdf, direction, scatters_diffusely};
+use super::perturbation::{bsdf_pdf, direction, scatters_diffusely, specular_only};
 use super::state::PathState;
 use super::walk::{cone_direction, cone_pdf, trace};
 use crate::bsdf::TransportMode;
@@ -62,22 +62,13 @@ pub struct GatherSection {
 /// The section of `path` a photon-map proposal replaces, when the path has the form
 /// `… (L|D) D S* D S* E` with `x_d` scattering diffusely.
 pub fn gather_section(path: &super::FullPath) -> Option<GatherSection> {
-    let k = path.edges();
-    if k < 3 {
+    if path.edges() < 3 {
         return None;
     }
-    let d = (1..k).rev().find(|&i| !path.specular(i))?;
-    if !scatters_diffusely(&path.vertices[d]) {
-        return None;
-    }
+    let d = super::user_path::eye_diffuse(path)?;
     let a = (1..d).rev().find(|&i| !path.specular(i))?;
     let l = a - 1;
     (!path.specular(l)).then_some(GatherSection { l, d })
-}
-
-/// Whether `v` only scatters specularly (a traced gather ray passes through it).
-fn specular_only(v: &Vertex) -> bool {
-    v.bsdf.as_ref().is_some_and(|b| b.is_delta_only())
 }
 
 /// The photon-map proposal on a scene.

@@ -34,7 +34,9 @@
 //! chooses between the two and accepts with the combined rule (see [`super::mutations`]).
 
 use super::mutation::{Change, Mutation, Registration};
-use super::perturbation::{branch_probability, bsdf_pdf, direction, refracts, scatters_diffusely};
+use super::perturbation::{
+    branch_probability, bsdf_pdf, direction, refracts, scatters_diffusely, specular_only,
+};
 use super::state::PathState;
 use super::walk::{cone_direction, cone_pdf, endpoint, trace};
 use crate::bsdf::TransportMode;
@@ -279,7 +281,7 @@ fn resolve(r: &RawPath, scene: &Scene) -> Result<UserPath, (usize, String)> {
         let only = b.as_ref().is_some_and(|b| b.is_delta_only());
         let line = r.points[j].2;
         if j == m {
-            if only || !b.as_ref().is_some_and(|b| !b.is_delta_only()) {
+            if only || b.as_ref().is_none_or(|b| b.is_delta_only()) {
                 return Err((
                     line,
                     "the last point of a path must lie on a surface that scatters diffusely".into(),
@@ -324,10 +326,6 @@ pub fn eye_diffuse(path: &super::FullPath) -> Option<usize> {
     let k = path.edges();
     let d = (1..k).rev().find(|&i| !path.specular(i))?;
     scatters_diffusely(&path.vertices[d]).then_some(d)
-}
-
-fn specular_only(v: &Vertex) -> bool {
-    v.bsdf.as_ref().is_some_and(|b| b.is_delta_only())
 }
 
 /// The user-path proposal on a scene.

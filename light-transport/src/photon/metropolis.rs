@@ -46,6 +46,7 @@ use crate::bsdf::TransportMode;
 use crate::metropolis::{MetropolisSettings, MetropolisStats, Recorder, Sink, run_with};
 use crate::path::{Vertex, connect_unoccluded, unoccluded};
 use crate::pathspace::path::retrace;
+use crate::pathspace::perturbation::specular_only;
 use crate::pathspace::walk::{lens_endpoint, trace};
 use crate::pathspace::{FullPath, MutationProbabilities, PathMlt, PathState};
 use crate::scene::Scene;
@@ -72,10 +73,6 @@ impl StoragePoint {
             Self::Global(j) | Self::Caustic(j) => j,
         }
     }
-}
-
-fn specular_only(v: &Vertex) -> bool {
-    v.bsdf.as_ref().is_some_and(|b| b.is_delta_only())
 }
 
 fn diffuse(v: &Vertex) -> bool {
@@ -545,7 +542,7 @@ pub fn sample_photons(
     let mut all: Vec<([u64; 7], (bool, Photon))> = sink.photons.into_iter().collect();
     all.sort_unstable_by_key(|(k, _)| *k);
     for (_, (is_caustic, mut p)) in all {
-        p.power = p.power * scale;
+        p.power *= scale;
         if !p.power.is_finite() || p.power.is_black() {
             continue;
         }
