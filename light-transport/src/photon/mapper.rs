@@ -96,8 +96,16 @@ impl PhotonMapper {
         Self::check(&settings)?;
         let s = &settings;
         let t = std::time::Instant::now();
-        let (global, _) = trace_photons(scene, s.global_paths, s.max_edges, s.seed);
-        let (_, caustic) = trace_photons(scene, s.caustic_paths, s.max_edges, s.seed ^ 0xCA05);
+        // A gather reads the global map two edges from the eye, the caustic map one edge: their
+        // photons' light paths may have `max_edges − 2` and `max_edges − 1` edges.
+        let (global, _) =
+            trace_photons(scene, s.global_paths, s.max_edges.saturating_sub(2), s.seed);
+        let (_, caustic) = trace_photons(
+            scene,
+            s.caustic_paths,
+            s.max_edges.saturating_sub(1),
+            s.seed ^ 0xCA05,
+        );
         let notes = vec![format!(
             "photons    traced: {} paths for the global map, {} for the caustic map, t_map {:.2} s",
             s.global_paths,

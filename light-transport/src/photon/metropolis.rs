@@ -26,9 +26,11 @@
 //! with `β_L(x_j)` the light subpath's throughput arriving at `x_j` (what a photon tracer stores),
 //! `C*_k` the path's `t = 1` strategy ratio (the chain's state holds it), and `Â⁻¹` an unbiased
 //! estimate of `1/A`: continuations are drawn independently until `r` of them land in `Q`, and
-//! with `N` drawn, `(N − 1)/(r − 1)` has mean `1/A` (negative binomial; `r = 4` by default, relative
-//! variance about `(1 − A)/(r − 2)`; Qin et al. 2015 use the `r = 1` count for inverse
-//! probabilities). Then `E[Σ_R Φ] = ∫_{Ω_R} f_map dμ` for every region `R` of storage points with
+//! with `N` drawn, `N/r` has mean `1/A` (negative binomial, `E[N] = r/A`; `r = 4` by default,
+//! relative variance `(1 − A)/r`; Qin et al. 2015 use the `r = 1` count for inverse
+//! probabilities). (`(N − 1)/(r − 1)` — Haldane's unbiased estimator of `A` turned upside down — is
+//! biased high by up to `r/(r − 1)`: the first version here used it, and the long comparison below
+//! caught it.) Then `E[Σ_R Φ] = ∫_{Ω_R} f_map dμ` for every region `R` of storage points with
 //! `A > 0`: the photon map is a particle map as a light tracer's is, but only where a gather can
 //! read it. For caustic photons on a pinhole camera `A ∈ {0, 1}`. Consequences: eye subpaths
 //! through specular surfaces before `x_d` (a diffuse point seen in a mirror) have `w = 0` and store
@@ -186,6 +188,9 @@ pub fn path_photon(
     seed: u64,
     scratch: &mut Vec<Vertex>,
 ) -> Option<(StoragePoint, Photon, bool)> {
+    // The top bit of `successes` asks for the defect `MpsDefect::HaldaneInverse`.
+    let haldane = successes & HALDANE != 0;
+    let successes = successes & !HALDANE;
     let path = &state.path;
     let at = storage_point(path)?;
     let j = at.index();
@@ -202,7 +207,7 @@ pub fn path_photon(
     let v = &prefix[j];
     let beta = v.beta;
     // 1/A: continuations drawn until `successes` land in Q (deterministic in the path: seeded by
-    // its hash); (N − 1)/(r − 1) is unbiased for r ≥ 2 (negative binomial), N itself for r = 1.
+    // its hash); the count N of draws is negative binomial with mean r/A, so N/r is unbiased.
     let mut rng = mcmc_core::rng::stream(seed, path_hash(path));
     let global = matches!(at, StoragePoint::Global(_));
     let (mut trials, mut hits) = (0u64, 0u64);
@@ -211,10 +216,10 @@ pub fn path_photon(
         hits += continuation_succeeds(scene, &prefix, global, max_edges, &mut rng, scratch) as u64;
     }
     let capped = hits < successes;
-    let inverse_a = match successes {
-        0 => 1.0, // MpsDefect::WithoutContinuationProbability
-        1 => trials as f64,
-        r => (trials - 1) as f64 / (r - 1) as f64,
+    let inverse_a = match (successes, haldane) {
+        (0, _) => 1.0, // MpsDefect::WithoutContinuationProbability
+        (r, true) if r >= 2 => (trials - 1) as f64 / (r - 1) as f64,
+        (r, _) => trials as f64 / r as f64,
     };
     let power = beta * (i_state * inverse_a / i_t1);
     if !power.is_finite() || power.is_black() {
@@ -237,6 +242,8 @@ pub fn path_photon(
         capped,
     ))
 }
+
+const HALDANE: u64 = 1 << 63;
 
 /// A hash of a path's vertex positions (its identity for repeated states).
 pub fn path_hash(path: &FullPath) -> u64 {
@@ -389,7 +396,7 @@ pub struct MpsSettings {
     /// The final gather (the photon counts are unused).
     pub gather: PhotonMapping,
     /// Continuations that must land in `Q` before a photon's `1/A` is estimated (`r`; the
-    /// estimate `(N − 1)/(r − 1)` from the `N` drawn has relative variance about `(1 − A)/(r − 2)`).
+    /// estimate `N/r` from the `N` drawn has relative variance `(1 − A)/r`).
     pub continuations: u64,
     /// Most continuations drawn per photon (one whose count reaches it keeps the estimate at the
     /// cap — biased low — and is counted).
@@ -403,6 +410,9 @@ pub struct MpsSettings {
 pub enum MpsDefect {
     /// `1/A = 1`: the photon power without the inverse continuation probability.
     WithoutContinuationProbability,
+    /// `1/A` estimated by `(N − 1)/(r − 1)` (Haldane's unbiased estimator of `A`, inverted): high
+    /// by up to `r/(r − 1)`.
+    HaldaneInverse,
 }
 
 impl MpsSettings {
@@ -517,10 +527,10 @@ pub fn sample_photons(
         scene,
         max_edges: method.mutations.max_edges,
         max_trials: settings.max_trials.max(1),
-        successes: if settings.defect == Some(MpsDefect::WithoutContinuationProbability) {
-            0
-        } else {
-            settings.continuations.max(1)
+        successes: match settings.defect {
+            Some(MpsDefect::WithoutContinuationProbability) => 0,
+            Some(MpsDefect::HaldaneInverse) => settings.continuations.max(1) | HALDANE,
+            None => settings.continuations.max(1),
         },
         seed: settings.metropolis.seed ^ 0x3F5,
         photons: HashMap::new(),

@@ -92,7 +92,8 @@ impl SampleStream for StratifiedStream<'_> {
     }
 }
 
-/// The photons of `paths` light subpaths of at most `max_edges` edges, subpath `i` drawn from
+/// The photons of `paths` light subpaths of at most `max_edges` edges (a photon at the end of a
+/// subpath of `j` edges stands for light that arrives after `j` edges), subpath `i` drawn from
 /// stream `(seed, i)` with its emission stratified (module docs): `(global, caustic)`.
 pub fn trace_photons(
     scene: &Scene,
@@ -117,7 +118,7 @@ pub fn trace_photons(
                     i: i as usize,
                     current: 0,
                 };
-                light_subpath(scene, &mut stream, max_edges, &mut path);
+                light_subpath(scene, &mut stream, max_edges + 1, &mut path);
                 store(&path, scale, &mut global, &mut caustic);
             }
             (global, caustic)

@@ -36,8 +36,8 @@ pub struct MpsArgs {
     #[arg(long, default_value_t = 30.0)]
     pub photon_map_gamma: f64,
     /// Metropolis photon sampling: light-walk continuations from a photon's storage point that
-    /// must reach the eye before its inverse continuation probability 1/A is estimated (r ≥ 2:
-    /// (N − 1)/(r − 1) over the N drawn, unbiased; larger r, less variance, more rays).
+    /// must reach the eye before its inverse continuation probability 1/A is estimated (N/r over
+    /// the N drawn, unbiased; larger r, less variance, more rays).
     #[arg(long, default_value_t = 4)]
     pub continuations: u64,
     /// Metropolis photon sampling: most continuations drawn per photon (photons reaching it are
