@@ -46,22 +46,32 @@ fn mean_var(x: &[f64]) -> (f64, f64) {
     (m, v / n)
 }
 
-fn mps_patch_power(scene: &Scene, seed: u64, defect: Option<MpsDefect>) -> Rgb {
+/// MPS with the paper's Lantern proposals on paths of at most `K` edges.
+fn mps_method() -> PathMlt {
     let mut mutations = Mutations::new(K);
     mutations.probabilities = proposals();
-    let method = PathMlt::new(mutations).expect("mutations");
-    let settings = MpsSettings {
+    PathMlt::new(mutations).expect("mutations")
+}
+
+/// 64 chains, 4000 bootstrap samples per length, `mutations` per pixel.
+fn mps_settings(seed: u64, mutations: f64, defect: Option<MpsDefect>) -> MpsSettings {
+    MpsSettings {
         metropolis: MetropolisSettings {
             chains: 64,
             bootstrap: 4000,
-            budget: Budget::SamplesPerPixel(192.0),
+            budget: Budget::SamplesPerPixel(mutations),
             seed,
             ..MetropolisSettings::default()
         },
         defect,
         ..MpsSettings::new(K)
-    };
-    let (global, _, _) = sample_photons(scene, &method, &settings, None, |_, _| true).expect("mps");
+    }
+}
+
+fn mps_patch_power(scene: &Scene, seed: u64, defect: Option<MpsDefect>) -> Rgb {
+    let settings = mps_settings(seed, 192.0, defect);
+    let (global, _, _) =
+        sample_photons(scene, &mps_method(), &settings, None, |_, _| true).expect("mps");
     power_in_box(&global, LO, HI)
 }
 
@@ -133,21 +143,9 @@ fn mps_stores_few_photons_behind_the_divider_of_rooms() {
     let scene =
         Scene::new(&builtin::builtin("rooms").expect("rooms"), Some((60, 45))).expect("scene");
     let (traced, _) = trace_photons(&scene, 100_000, K - 2, 0x600D);
-    let mut mutations = Mutations::new(K);
-    mutations.probabilities = proposals();
-    let method = PathMlt::new(mutations).expect("mutations");
-    let settings = MpsSettings {
-        metropolis: MetropolisSettings {
-            chains: 64,
-            bootstrap: 4000,
-            budget: Budget::SamplesPerPixel(64.0),
-            seed: 7,
-            ..MetropolisSettings::default()
-        },
-        ..MpsSettings::new(K)
-    };
+    let settings = mps_settings(7, 64.0, None);
     let (global, _, _) =
-        sample_photons(&scene, &method, &settings, None, |_, _| true).expect("mps");
+        sample_photons(&scene, &mps_method(), &settings, None, |_, _| true).expect("mps");
     let (pm_slab, pm_far) = behind_the_divider(&traced);
     let (mps_slab, mps_far) = behind_the_divider(&global);
     println!(
@@ -214,41 +212,7 @@ fn mps_photon_power_matches_light_tracing_flux_without_spheres() {
     );
     let white = s.matte(0.725, 0.71, 0.68);
     let black = s.matte(0.0, 0.0, 0.0);
-    s.quad(
-        DVec3::new(-1.0, 0.0, -1.0),
-        DVec3::Z * 2.0,
-        DVec3::X * 2.0,
-        white,
-        None,
-    );
-    s.quad(
-        DVec3::new(-1.0, 2.0, -1.0),
-        DVec3::X * 2.0,
-        DVec3::Z * 2.0,
-        white,
-        None,
-    );
-    s.quad(
-        DVec3::new(-1.0, 0.0, -1.0),
-        DVec3::X * 2.0,
-        DVec3::Y * 2.0,
-        white,
-        None,
-    );
-    s.quad(
-        DVec3::new(-1.0, 0.0, -1.0),
-        DVec3::Y * 2.0,
-        DVec3::Z * 2.0,
-        white,
-        None,
-    );
-    s.quad(
-        DVec3::new(1.0, 0.0, -1.0),
-        DVec3::Z * 2.0,
-        DVec3::Y * 2.0,
-        white,
-        None,
-    );
+    s.cornell_walls([white; 5]);
     s.quad(
         DVec3::new(-0.24, 1.98, -0.22),
         DVec3::X * 0.47,

@@ -226,6 +226,18 @@ impl SceneBuilder {
         });
     }
 
+    /// The inward-facing walls of the Cornell box `[−1, 1] × [0, 2] × [−1, 1]`, open at `z = +1`,
+    /// with materials `[floor, ceiling, back, left, right]` (in that order).
+    pub fn cornell_walls(&mut self, m: [usize; 5]) {
+        let (x2, y2, z2) = (DVec3::X * 2.0, DVec3::Y * 2.0, DVec3::Z * 2.0);
+        let corner = DVec3::new(-1.0, 0.0, -1.0);
+        self.quad(corner, z2, x2, m[0], None); // floor (+y)
+        self.quad(DVec3::new(-1.0, 2.0, -1.0), x2, z2, m[1], None); // ceiling (−y)
+        self.quad(corner, x2, y2, m[2], None); // back (+z)
+        self.quad(corner, y2, z2, m[3], None); // left (+x)
+        self.quad(DVec3::new(1.0, 0.0, -1.0), z2, y2, m[4], None); // right (−x)
+    }
+
     /// A sphere.
     pub fn sphere(&mut self, center: DVec3, radius: f64, material: usize) {
         self.d.spheres.push(SphereDesc {
@@ -261,42 +273,7 @@ fn cornell() -> SceneDescription {
         kr: Rgb::WHITE,
         kt: Rgb::WHITE,
     });
-    // Inward-facing walls of the box [−1, 1] × [0, 2] × [−1, 1], open at z = +1.
-    s.quad(
-        DVec3::new(-1.0, 0.0, -1.0),
-        DVec3::Z * 2.0,
-        DVec3::X * 2.0,
-        white,
-        None,
-    ); // floor (+y)
-    s.quad(
-        DVec3::new(-1.0, 2.0, -1.0),
-        DVec3::X * 2.0,
-        DVec3::Z * 2.0,
-        white,
-        None,
-    ); // ceiling (−y)
-    s.quad(
-        DVec3::new(-1.0, 0.0, -1.0),
-        DVec3::X * 2.0,
-        DVec3::Y * 2.0,
-        white,
-        None,
-    ); // back (+z)
-    s.quad(
-        DVec3::new(-1.0, 0.0, -1.0),
-        DVec3::Y * 2.0,
-        DVec3::Z * 2.0,
-        red,
-        None,
-    ); // left (+x)
-    s.quad(
-        DVec3::new(1.0, 0.0, -1.0),
-        DVec3::Z * 2.0,
-        DVec3::Y * 2.0,
-        green,
-        None,
-    ); // right (−x)
+    s.cornell_walls([white, white, white, red, green]);
     s.quad(
         DVec3::new(-0.24, 1.98, -0.22),
         DVec3::X * 0.47,

@@ -243,41 +243,7 @@ pub fn mirror_box() -> SceneDescription {
         kr: Rgb::WHITE,
         kt: Rgb::WHITE,
     });
-    s.quad(
-        DVec3::new(-1.0, 0.0, -1.0),
-        DVec3::Z * 2.0,
-        DVec3::X * 2.0,
-        white,
-        None,
-    ); // floor
-    s.quad(
-        DVec3::new(-1.0, 2.0, -1.0),
-        DVec3::X * 2.0,
-        DVec3::Z * 2.0,
-        white,
-        None,
-    ); // ceiling
-    s.quad(
-        DVec3::new(-1.0, 0.0, -1.0),
-        DVec3::X * 2.0,
-        DVec3::Y * 2.0,
-        white,
-        None,
-    ); // back
-    s.quad(
-        DVec3::new(-1.0, 0.0, -1.0),
-        DVec3::Y * 2.0,
-        DVec3::Z * 2.0,
-        red,
-        None,
-    ); // left
-    s.quad(
-        DVec3::new(1.0, 0.0, -1.0),
-        DVec3::Z * 2.0,
-        DVec3::Y * 2.0,
-        mirror,
-        None,
-    ); // right: a mirror
+    s.cornell_walls([white, white, white, red, mirror]); // the right wall is a mirror
     s.quad(
         DVec3::new(-0.24, 1.98, -0.22),
         DVec3::X * 0.47,
