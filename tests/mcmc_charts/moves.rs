@@ -683,3 +683,106 @@ fn a_chart_swap_without_its_proposal_ratio_is_caught() {
     assert!(good.passed, "{good}");
     assert!(!bad.passed, "{bad}");
 }
+
+/// A toy outside sampler for [`mcmc_charts::moves::ChartIndependence`]: in chart `k` it draws
+/// coordinate `k` of the point as `v²` (density `1/(2√x)`) and the other uniformly, and fails
+/// with probability 0.3 (a sub-probability proposal, like a density-estimation merge that finds
+/// no light vertex). `forget` reports the uniform density instead (deliberately wrong).
+struct SquareSampler {
+    forget: bool,
+}
+
+impl mcmc_charts::moves::PointSampler<P2> for SquareSampler {
+    fn draw(&self, chart: usize, y: &mut P2, rng: &mut ChainRng) -> bool {
+        if uniform(rng) < 0.3 {
+            return false;
+        }
+        let (v, w) = (uniform(rng), uniform(rng));
+        let k = chart.min(1);
+        y[k] = v * v;
+        y[1 - k] = w;
+        true
+    }
+
+    fn ln_density(&self, chart: usize, x: &P2) -> f64 {
+        if !inside(x) {
+            return f64::NEG_INFINITY;
+        }
+        let c = x[chart.min(1)];
+        0.7f64.ln()
+            + if self.forget {
+                0.0
+            } else {
+                -(2.0 * c.sqrt()).ln()
+            }
+    }
+
+    fn name(&self) -> String {
+        "square".into()
+    }
+}
+
+/// Chains kept in their charts (the level targets), moved by in-chart steps and the independence
+/// sampler of eqs. 28–29 (an outside sampler mixed with the chart's pushforward): both rules keep
+/// each chart's law; an outside sampler that misreports its density is caught.
+#[test]
+fn independence_samplers_in_a_chart_keep_its_law() {
+    use mcmc_charts::moves::{ChartIndependence, IndependenceRule};
+    let (atlas, f) = broken_fixture();
+    let t = target(&atlas, &f, TargetKind::Weighted);
+    let run = |rule: IndependenceRule, forget: bool, seed: u64| {
+        let mix: Mixture<'_, State> = Mixture::new(
+            vec![
+                (
+                    0.3,
+                    Box::new(InChart::new(pssmlt_kernel()))
+                        as Box<dyn Proposal<State> + Send + Sync>,
+                ),
+                (
+                    0.7,
+                    Box::new(ChartIndependence::new(
+                        &t,
+                        SquareSampler { forget },
+                        0.6,
+                        rule,
+                    )),
+                ),
+            ],
+            MixtureRule::PerComponent,
+        )
+        .unwrap();
+        let mut mh = [0, 1].map(|k| {
+            MetropolisHastings::new(
+                Level {
+                    family: &t,
+                    level: k,
+                },
+                &mix,
+            )
+        });
+        let exact_k = |k: usize, r: &mut ChainRng| {
+            let x = draw_point(&f, &|x: &P2| weights(&t, x)[k], r);
+            in_chart(&t, k, x, r)
+        };
+        let exact = |r: &mut ChainRng| vec![exact_k(0, r), exact_k(1, r)];
+        invariance(
+            &exact,
+            |s: &mut Vec<State>, r: &mut ChainRng| {
+                for (k, st) in s.iter_mut().enumerate() {
+                    mh_step(&t, &mut mh[k], st, r);
+                }
+            },
+            |s: &Vec<State>| s.iter().flat_map(|st| st.x.to_vec()).collect(),
+            &inv_config(4000, 2, false),
+            &mut stream(seed, 0),
+        )
+        .unwrap()
+    };
+    let expected = run(IndependenceRule::Expected, false, 21);
+    let per_component = run(IndependenceRule::PerComponent, false, 22);
+    let forgot = run(IndependenceRule::Expected, true, 23);
+    println!("eq. 29: {expected}\neq. 28: {per_component}\nmisreported density: {forgot}");
+    assert!(expected.passed, "{expected}");
+    assert!(per_component.passed, "{per_component}");
+    assert!(!forgot.passed, "{forgot}");
+}

@@ -48,6 +48,14 @@
 //! ratio on the joint target is `Π(y) T(x|y) / (Π(x) T(y|x))` with `Π = Σ_k c_k π̄_k` the point
 //! marginal: `g` cancels. [`Refresh`] has the details.
 //!
+//! # Independence samplers in a chart ([`ChartIndependence`])
+//! Given its chart `i`, a chain's point has law `π̄_i`. A point `y` drawn independently of the
+//! current one, with density `Q_i`, followed by `u' ~ κ_i(·|y)`, is accepted with
+//! `min(1, π̄_i(y) Q_i(x) / (π̄_i(x) Q_i(y)))` — the [`Refresh::KeepChart`] rule with the point ratio
+//! `ln Q_i(x) − ln Q_i(y)`. Mixing an outside sampler `q_i` (probability `λ`) with the chart's own
+//! pushforward `p_i`, `Q_i = λ q_i + (1 − λ) p_i` (the paper's eq. 29) or each component's own density
+//! (eq. 28, a mixture of two valid kernels) are both exact.
+//!
 //! # Charts without an exact inverse
 //! If `R_i` samples `ρ_i = λ_i κ_i` instead of `κ_i`, the Gibbs draws above become proposals and the
 //! ratios gain `λ_i(u) / λ_j(u')` (swaps: the reverse move draws `u` with `λ_i`, the forward move
@@ -56,6 +64,7 @@
 
 mod exchange;
 mod in_chart;
+mod independent;
 mod ipsm;
 mod point_move;
 mod refresh;
@@ -64,6 +73,9 @@ mod target_space;
 
 pub use exchange::{Exchange, exchange, exchange_ln_ratio};
 pub use in_chart::InChart;
+pub use independent::{
+    ChartIndependence, FROM_CHART, FROM_SAMPLER, IndependenceRule, PointSampler,
+};
 pub use ipsm::InversePerturbation;
 pub use point_move::PointMove;
 pub use refresh::Refresh;
