@@ -18,12 +18,18 @@
 //! the invariance check.
 
 use light_transport::Rgb;
-use light_transport::cmlt::{Cmlt, CmltSettings, CmltState, TechniqueJoint};
+use light_transport::cmlt::{
+    Cmlt, CmltMove, CmltSettings, CmltState, DensityEstimation, LightVertices, MergeSampler,
+    TechniqueJoint,
+};
 use light_transport::math::DVec3;
+use light_transport::metropolis::ImportanceKind;
 use light_transport::metropolis::Method;
+use light_transport::pathspace::PathState;
 use light_transport::scene::Scene;
 use light_transport::scene::builtin::SceneBuilder;
 use mcmc_charts::Joint;
+use mcmc_charts::moves::{ChartIndependence, FROM_SAMPLER, IndependenceRule, PointSampler};
 use mcmc_charts::moves::{InversePerturbation, Refresh};
 use mcmc_core::balance::exchangeability::{ExchangeabilityConfig, QuantileGrid, exchangeability};
 use mcmc_core::balance::invariance::{InvarianceConfig, invariance};
@@ -84,8 +90,18 @@ fn cmlt() -> Cmlt {
 
 /// Exact draws of the joint target by rejection under the bound `m`.
 fn exact_draw(joint: &TechniqueJoint<'_>, m: f64, rng: &mut ChainRng) -> CmltState {
+    exact_draw_in(joint, m, None, rng)
+}
+
+/// Exact draws of the joint target, or of its conditional law in `chart`, by rejection.
+fn exact_draw_in(
+    joint: &TechniqueJoint<'_>,
+    m: f64,
+    chart: Option<usize>,
+    rng: &mut ChainRng,
+) -> CmltState {
     loop {
-        let s = uniform_index(uniform(rng), K + 1);
+        let s = chart.unwrap_or_else(|| uniform_index(uniform(rng), K + 1));
         let dim = joint.target.atlas.dim(s);
         let mut state = CmltState::in_chart(s, (0..dim).map(|_| uniform(rng)).collect());
         let l = joint.evaluate(&mut state);
@@ -279,4 +295,264 @@ fn a_broken_swap_and_a_broken_ipsm_are_caught() {
     let (ok, report) = invariance_passes(&joint, bound, &mut kernel, 5, 4);
     println!("ipsm without the density ratio: {report}");
     assert!(!ok, "the broken IPSM was not caught: {report}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Density estimation as an independence sampler (charted-MLT paper §5.3, eqs. 28–29).
+
+/// Merge settings for the balance checks: a radius of 2% of the bounding-sphere radius (0.044
+/// here; `π r² p_→` is then within 0.1% of the merge probability on the floor, see
+/// `the_merge_probability_approximation_shrinks_with_the_radius`), 4000 light subpaths per map
+/// (5.3 vertices per lookup on average at the floor's centre, fewer elsewhere), cap 16 (a
+/// lookup finds more with probability below 3e-5).
+fn merge_settings(share: f64, rule: IndependenceRule) -> DensityEstimation {
+    DensityEstimation {
+        probability: 0.7,
+        merge_share: share,
+        radius: 0.02,
+        light_paths: 4000,
+        cap: 16,
+        rule,
+        ..Default::default()
+    }
+}
+
+fn merge_sampler(settings: &DensityEstimation) -> MergeSampler<'static> {
+    MergeSampler {
+        scene: scene(),
+        k: K,
+        importance: ImportanceKind::Luminance,
+        settings: settings.clone(),
+        vertices: LightVertices::FreshPerProposal,
+        counters: None,
+    }
+}
+
+/// A merge sampler that reports the connection density for its candidates (eq. 28 with the merge
+/// probability forgotten: merges treated as connections). Deliberately wrong.
+struct MergeAsConnection(MergeSampler<'static>);
+
+impl PointSampler<PathState> for MergeAsConnection {
+    fn draw(&self, s: usize, y: &mut PathState, rng: &mut ChainRng) -> bool {
+        self.0.draw(s, y, rng)
+    }
+    fn ln_density(&self, s: usize, x: &PathState) -> f64 {
+        let m = self.0.ln_merge_factor(s, x);
+        self.0.ln_density(s, x) - if m.is_finite() { m } else { 0.0 }
+    }
+    fn name(&self) -> String {
+        "merge as connection".into()
+    }
+}
+
+/// In-chart steps (30%) and the density-estimation independence sampler (70%; 80% merges), with
+/// a fresh light-vertex map for every merge (so the only approximation left is `π r² p_→`,
+/// 0.1% here), four steps from exact draws of chart `s = 1` (the only chart of these two-edge
+/// paths a merge can make; the kernel keeps the chart, so it must keep the chart's conditional
+/// law): eq. 29 and eq. 28 keep it (the per-component rule is equivalent in law, as Tierney
+/// 1998's mixtures of kernels are; eq. 29 dominates it in Peskun's order); a merge accepted as if
+/// it were a connection is caught (with 10 000 replicates: the merges are a small part of the
+/// moves). α = 1e-4 per check.
+#[test]
+fn density_estimation_keeps_the_joint_target() {
+    let m = cmlt();
+    let scene = scene();
+    let atlas = m.atlas(scene, K);
+    let target = Cmlt::target(&atlas);
+    let joint = Joint::new(&target);
+    let bound = bound(&joint);
+    let in_chart = || m.moves(scene, &target, K).expect("moves").swap_remove(0).1;
+    let run = |merge: CmltMove<'_>, seed: u64, replicates: usize| {
+        let mix = Mixture::new(
+            vec![(0.3, in_chart()), (0.7, merge)],
+            MixtureRule::PerComponent,
+        )
+        .expect("mixture");
+        let mut kernel = MetropolisHastings::new(&joint, mix);
+        let mut stats = mcmc_core::Stats::default();
+        let r = invariance(
+            |rng: &mut ChainRng| exact_draw_in(&joint, bound, Some(1), rng),
+            |s: &mut CmltState, rng: &mut ChainRng| {
+                let l = joint.evaluate(s);
+                let mut c = Chain::unchecked(std::mem::take(s), l);
+                for _ in 0..4 {
+                    kernel.step(&mut c, rng, &mut ());
+                }
+                stats.merge(&c.stats);
+                *s = c.state;
+            },
+            features,
+            &InvarianceConfig {
+                replicates,
+                steps: 1,
+                alpha: ALPHA,
+                categorical: vec![0],
+            },
+            &mut stream(seed, 0),
+        )
+        .expect("check runs");
+        let k = |i: usize| stats.kinds.get(i).cloned().unwrap_or_default();
+        // Kinds: small step, large step, then the independence sampler's merge and connection.
+        let (merge, conn) = (k(2), k(3));
+        let rate = |s: &mcmc_core::KindStats| s.accepted as f64 / s.proposed.max(1) as f64;
+        let made = merge.proposed - merge.failed;
+        println!(
+            "  merges: {} proposed, {} made, {} accepted ({:.1}% of those made); connections: {:.1}% accepted",
+            merge.proposed,
+            made,
+            merge.accepted,
+            100.0 * merge.accepted as f64 / made.max(1) as f64,
+            100.0 * rate(&conn),
+        );
+        (r.passed, r.to_string(), merge.accepted)
+    };
+    let expected = merge_settings(0.8, IndependenceRule::Expected);
+    let per_component = merge_settings(0.8, IndependenceRule::PerComponent);
+    let (ok, report, accepted) = run(
+        Box::new(ChartIndependence::new(
+            &target,
+            merge_sampler(&expected),
+            0.8,
+            expected.rule,
+        )),
+        31,
+        4000,
+    );
+    println!("eq. 29: {report}");
+    assert!(ok, "{report}");
+    assert!(
+        accepted > 500,
+        "too few merges accepted ({accepted}) for the check to see them"
+    );
+    let (ok, report, _) = run(
+        Box::new(ChartIndependence::new(
+            &target,
+            merge_sampler(&per_component),
+            0.8,
+            per_component.rule,
+        )),
+        32,
+        4000,
+    );
+    println!("eq. 28: {report}");
+    assert!(ok, "{report}");
+    let (ok, report, _) = run(
+        Box::new(ChartIndependence::new(
+            &target,
+            MergeAsConnection(merge_sampler(&expected)),
+            0.8,
+            expected.rule,
+        )),
+        33,
+        10_000,
+    );
+    println!("merges taken for connections: {report}");
+    assert!(
+        !ok,
+        "a merge accepted as a connection was not caught: {report}"
+    );
+}
+
+/// The density the eq. 29 rule uses, `Q_s = p_s/I(f) · (λ m + 1 − λ)`, against an independent
+/// computation of the merge factor `m = π r² p_→ N / cap` from the geometry: the emitter's
+/// cosine lobe `cos θ_y / π`, and `cos θ_z / d²` at the floor. 2000 paths of chart `s = 1`.
+#[test]
+fn the_expected_density_of_eq_29_matches_an_independent_computation() {
+    let m = cmlt();
+    let scene = scene();
+    let atlas = m.atlas(scene, K);
+    let target = Cmlt::target(&atlas);
+    let settings = merge_settings(0.3, IndependenceRule::Expected);
+    let move_ = ChartIndependence::new(&target, merge_sampler(&settings), 0.3, settings.rule);
+    let r = settings.radius_in(scene);
+    let mut rng = stream(41, 0);
+    let (mut checked, mut worst) = (0, 0.0f64);
+    while checked < 2000 {
+        let dim = atlas.dim(1);
+        let mut state = CmltState::in_chart(1, (0..dim).map(|_| uniform(&mut rng)).collect());
+        target.refresh(&mut state);
+        if !(state.valid && state.importance > 0.0) {
+            continue;
+        }
+        let v = &state.x.path.vertices;
+        let (y, z) = (&v[0], &v[1]);
+        let d = z.p() - y.p();
+        let w = d.normalize();
+        let p_to = (y.n().dot(w).max(0.0) / std::f64::consts::PI) * z.n().dot(-w).abs()
+            / d.length_squared();
+        let merge = std::f64::consts::PI * r * r * p_to * 4000.0 / 16.0;
+        let independent = state.ln_p[1] + (0.3 * merge + 0.7).ln();
+        let from_move = move_.ln_proposal_density(1, &state, FROM_SAMPLER);
+        worst = worst.max((independent - from_move).abs());
+        checked += 1;
+    }
+    println!("2000 paths: max |Δ ln Q| = {worst:.2e}");
+    assert!(worst < 1e-9, "max |Δ ln Q| = {worst}");
+}
+
+/// The approximation `P_merge ≈ π r² p_→(y → z)` against the merge probability itself,
+/// estimated by tracing the light's emission from a fixed point `y` of the emitter 4 million
+/// times and counting the floor hits within `r` of `z` (normals agree there). At the floor's
+/// centre and 0.02 from its edge; radii 0.5%–32% of the bounding-sphere radius. The relative
+/// error shrinks with `r` (at the edge, half the disc hangs off the floor: the approximation is
+/// twice the probability until `r` drops below the distance to the edge). 5σ bounds on the
+/// counts.
+#[test]
+fn the_merge_probability_approximation_shrinks_with_the_radius() {
+    use light_transport::path::light_subpath;
+    use light_transport::sampler::ReplayStream;
+    let scene = scene();
+    let n = 4_000_000usize;
+    // Emission from the light's centre: the light stream's choice/position numbers are fixed.
+    let mut hits = Vec::with_capacity(n);
+    let mut rng = stream(51, 0);
+    let mut sub = Vec::new();
+    let mut y = None;
+    for _ in 0..n {
+        let nums = [0.5, 0.5, 0.5, uniform(&mut rng), uniform(&mut rng)];
+        light_subpath(scene, &mut ReplayStream::new(&[], &nums, &[]), 2, &mut sub);
+        if y.is_none() {
+            y = sub.first().cloned();
+        }
+        if let Some(v) = sub.get(1) {
+            hits.push(v.p());
+        }
+    }
+    let y = y.expect("light vertex");
+    let bound_r = 0.5 * (scene.bounds.1 - scene.bounds.0).length();
+    println!("fraction   r      point   approx      measured    rel. error");
+    let mut errors = Vec::new();
+    for (name, z) in [
+        ("centre", DVec3::new(0.1, 0.0, -0.05)),
+        ("edge", DVec3::new(1.48, 0.0, 0.3)),
+    ] {
+        let d = z - y.p();
+        let w = d.normalize();
+        let p_to = (y.n().dot(w).max(0.0) / std::f64::consts::PI) * w.y.abs() / d.length_squared();
+        let mut errs = Vec::new();
+        for fraction in [0.32, 0.08, 0.02, 0.005] {
+            let r = fraction * bound_r;
+            let approx = std::f64::consts::PI * r * r * p_to;
+            let count = hits.iter().filter(|h| (**h - z).length() < r).count() as f64;
+            let measured = count / n as f64;
+            let sigma = (approx * n as f64).sqrt() / n as f64;
+            let rel = approx / measured - 1.0;
+            println!(
+                "{fraction:<8} {r:<6.4} {name:<7} {approx:.4e}  {measured:.4e}  {rel:+.4} (±{:.4})",
+                5.0 * sigma / measured
+            );
+            errs.push((rel, 5.0 * sigma / measured));
+        }
+        errors.push(errs);
+    }
+    // Centre: the error falls with r and is within noise at the two smallest radii.
+    let centre = &errors[0];
+    assert!(centre[0].0.abs() > centre[1].0.abs(), "{centre:?}");
+    for &(rel, tol) in &centre[2..] {
+        assert!(rel.abs() < tol.max(0.005), "{centre:?}");
+    }
+    // Edge: twice the probability while the disc overhangs (r ≥ 0.02 from the edge), exact below.
+    let edge = &errors[1];
+    assert!(edge[1].0 > 0.5, "{edge:?}");
+    assert!(edge[3].0.abs() < edge[3].1.max(0.005), "{edge:?}");
 }

@@ -32,6 +32,8 @@
 //! The recorded colour is the path's balance-heuristic value `f / Σ p` (importance `π_s(u)`), as
 //! for path-space MLT.
 
+use super::density_estimation::{DensityEstimation, LightVertices, MergeCounters, MergeSampler};
+use super::light_vertex_map::LightVertexMap;
 use super::technique::{TechniqueChart, unit_integrand};
 use crate::metropolis::{ImportanceKind, Method, Recordable};
 use crate::pathspace::{
@@ -39,13 +41,17 @@ use crate::pathspace::{
 };
 use crate::scene::Scene;
 use crate::{Error, Result};
-use mcmc_charts::moves::{ChartSwap, InChart, InversePerturbation, PointMove, Refresh};
+use mcmc_charts::moves::{
+    ChartIndependence, ChartSwap, InChart, InversePerturbation, PointMove, Refresh,
+};
 use mcmc_charts::{Atlas, Chart, ChartState, ChartedTarget, Joint, TargetKind};
 use mcmc_core::kernel::Observer;
 use mcmc_core::proposals::{CubeWalk, Independence, Mixture, MixtureRule, SmallStep, UniformCube};
 use mcmc_core::rng::{stream, uniform, uniform_index};
 use mcmc_core::tempering::LevelProposal;
 use mcmc_core::{Chain, ChainRng, Family, Kernel, MetropolisHastings, Proposal, Target};
+use std::sync::atomic::Ordering;
+use std::sync::{Arc, RwLock};
 
 /// A CMLT chain state: technique chart, numbers and path.
 pub type CmltState = ChartState<PathState>;
@@ -111,6 +117,8 @@ pub struct CmltSettings {
     pub mutations: Mutations,
     /// Uniform samples per technique chart in the pilot estimating technique energies.
     pub pilot: usize,
+    /// Density estimation as an independence sampler (§5.3; off when its probability is 0).
+    pub density_estimation: DensityEstimation,
 }
 
 impl Default for CmltSettings {
@@ -128,6 +136,7 @@ impl Default for CmltSettings {
             pathspace: 0.0,
             mutations: Mutations::new(8),
             pilot: 1000,
+            density_estimation: DensityEstimation::default(),
         }
     }
 }
@@ -152,12 +161,22 @@ pub struct Cmlt {
     pub settings: CmltSettings,
     /// Swap proposal `q(s | k)`, index `[k − 1][s]`.
     pub swap_proposal: Vec<Vec<f64>>,
+    /// The light-vertex map of density estimation (rebuilt every round; built on first use).
+    light_vertices: Arc<RwLock<Option<Arc<LightVertexMap>>>>,
+    /// Merge counters.
+    merges: Arc<MergeCounters>,
 }
 
 /// Move kinds, in statistics order (the path-space mutations follow).
 pub const KINDS: [&str; 4] = ["small step", "large step", "chart swap", "ipsm"];
+/// Kinds of the density-estimation move (after the path-space mutations).
+pub const MERGE_KINDS: [&str; 2] = [
+    "density estimation: merge",
+    "density estimation: connection",
+];
 pub(super) const SWAP: usize = 2;
 const PILOT: u64 = 0xC417;
+const LIGHT_VERTICES: u64 = 0x11_6487;
 
 impl Cmlt {
     /// CMLT on `scene`: validates the settings and runs the pilot that estimates the energy of
@@ -195,10 +214,12 @@ impl Cmlt {
                 return Err(bad(name, format!("must be a probability, got {p}")));
             }
         }
-        if ipsm + pathspace > 1.0 {
+        let de = settings.density_estimation.probability;
+        settings.density_estimation.validate()?;
+        if ipsm + pathspace + de > 1.0 {
             return Err(bad(
-                "ipsm + pathspace",
-                format!("probabilities sum to {} > 1", ipsm + pathspace),
+                "ipsm + pathspace + density estimation",
+                format!("probabilities sum to {} > 1", ipsm + pathspace + de),
             ));
         }
         if !(swap_every == 0.0 || (swap_every >= 1.0 && swap_every.is_finite())) {
@@ -253,7 +274,34 @@ impl Cmlt {
         Ok(Self {
             settings,
             swap_proposal,
+            light_vertices: Arc::default(),
+            merges: Arc::default(),
         })
+    }
+
+    /// Build the light-vertex map of density estimation from stream key `seed` (replacing the
+    /// current one).
+    pub fn rebuild_light_vertices(&self, scene: &Scene, seed: u64) -> Result<Arc<LightVertexMap>> {
+        let st = &self.settings;
+        let map = Arc::new(LightVertexMap::build(
+            scene,
+            st.max_edges.saturating_sub(1).max(1),
+            st.density_estimation.light_paths,
+            seed,
+        )?);
+        if let Ok(mut m) = self.light_vertices.write() {
+            *m = Some(map.clone());
+        }
+        Ok(map)
+    }
+
+    /// The current light-vertex map (built from a fixed key if no round has built one yet).
+    pub fn light_vertex_map(&self, scene: &Scene) -> Result<Arc<LightVertexMap>> {
+        let current = self.light_vertices.read().ok().and_then(|m| m.clone());
+        match current {
+            Some(m) => Ok(m),
+            None => self.rebuild_light_vertices(scene, LIGHT_VERTICES),
+        }
     }
 
     /// The technique chart `s` of paths of `k` edges.
@@ -331,9 +379,28 @@ impl Cmlt {
             Box::new(Unused(crate::pathspace::REGISTRY.len()))
         };
         let rest = 1.0 - p_swap;
+        let de = &st.density_estimation;
+        let merges: CmltMove<'a> = if de.probability > 0.0 {
+            let sampler = MergeSampler {
+                scene,
+                k,
+                importance: st.importance,
+                settings: de.clone(),
+                vertices: LightVertices::Shared(self.light_vertex_map(scene)?),
+                counters: Some(self.merges.clone()),
+            };
+            Box::new(ChartIndependence::new(
+                target,
+                sampler,
+                de.merge_share,
+                de.rule,
+            ))
+        } else {
+            Box::new(Unused(MERGE_KINDS.len()))
+        };
         Ok(vec![
             (
-                rest * (1.0 - st.ipsm - st.pathspace),
+                rest * (1.0 - st.ipsm - st.pathspace - st.density_estimation.probability),
                 Box::new(InChart::new(in_chart)),
             ),
             (
@@ -348,6 +415,7 @@ impl Cmlt {
                 ),
             ),
             (rest * st.pathspace, path_moves),
+            (rest * de.probability, merges),
         ])
     }
 
@@ -471,6 +539,39 @@ impl Method for Cmlt {
         }
     }
 
+    fn new_round(&self, scene: &Scene, round: u64, seed: u64) -> Result<()> {
+        if self.settings.density_estimation.probability > 0.0 {
+            self.rebuild_light_vertices(scene, seed ^ LIGHT_VERTICES ^ round.rotate_left(32))?;
+        }
+        Ok(())
+    }
+
+    fn details(&self) -> Vec<String> {
+        let de = &self.settings.density_estimation;
+        if de.probability == 0.0 {
+            return Vec::new();
+        }
+        let c = &self.merges;
+        let n = c.proposals.load(Ordering::Relaxed).max(1) as f64;
+        let found = c.found.load(Ordering::Relaxed) as f64;
+        let vertices = self
+            .light_vertices
+            .read()
+            .ok()
+            .and_then(|m| m.as_ref().map(|m| m.vertices()))
+            .unwrap_or(0);
+        vec![format!(
+            "density estimation: {} light paths ({} vertices) per map, radius {}, cap {}; {:.1}% of merges found a vertex, {:.2} on average, {:.3}% over the cap",
+            de.light_paths,
+            vertices,
+            de.radius,
+            de.cap,
+            100.0 * found / n,
+            c.vertices.load(Ordering::Relaxed) as f64 / n,
+            100.0 * c.overflows.load(Ordering::Relaxed) as f64 / n,
+        )]
+    }
+
     fn exchange_every(&self) -> Option<u64> {
         let st = &self.settings;
         (st.swaps == SwapKind::ReplicaExchange && st.swap_every > 0.0)
@@ -499,6 +600,7 @@ impl Method for Cmlt {
                     .into_iter()
                     .map(|k| format!("path: {k}")),
             )
+            .chain(MERGE_KINDS.iter().map(|k| k.to_string()))
             .collect()
     }
 }

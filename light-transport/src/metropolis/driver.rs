@@ -63,6 +63,11 @@ pub trait Method: Sync {
     fn warm_up(&self, _scene: &Scene, _chains: &[Chain<Self::State>], _seed: u64) -> Result<()> {
         Ok(())
     }
+    /// Called before every round of mutations (`round` counts from 0; `seed` is the render's
+    /// master seed), e.g. to rebuild a structure the chains share. Nothing by default.
+    fn new_round(&self, _scene: &Scene, _round: u64, _seed: u64) -> Result<()> {
+        Ok(())
+    }
     /// Lines the method adds to the render's summary (e.g. statistics of its moves beyond
     /// acceptance); none by default.
     fn details(&self) -> Vec<String> {
@@ -354,7 +359,10 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let b = stats.normalisation;
     let exchange_every = method.exchange_every();
     let mut exchange_rng = substream(settings.seed, EXCHANGE, 0);
+    let mut round = 0;
     loop {
+        method.new_round(scene, round, settings.seed)?;
+        round += 1;
         let k = match total {
             Some(t) => per_round
                 .min((t - stats.mutations).div_ceil(nchains))

@@ -3,9 +3,10 @@
 use crate::cli::CliError;
 use crate::cli::registry::{AlgoArgs, Common, Entry};
 use clap::Args;
-use light_transport::cmlt::{Cmlt, CmltSettings, SwapKind};
+use light_transport::cmlt::{Cmlt, CmltSettings, DensityEstimation, SwapKind};
 use light_transport::renderer::Metropolis;
 use light_transport::scene::Scene;
+use mcmc_charts::moves::IndependenceRule;
 
 /// Charted MLT (Pantaleoni 2017).
 pub const ENTRY: Entry = Entry {
@@ -51,6 +52,28 @@ pub struct CmltArgs {
     /// Uniform samples per technique chart in the pilot estimating technique energies.
     #[arg(long, default_value_t = 1000)]
     pub cmlt_pilot: usize,
+    /// Probability of a density-estimation move per mutation (charted-MLT paper §5.3): an
+    /// independence sampler mixing merges with a stored light vertex and bidirectional
+    /// connections by their expected density (eq. 29). Slightly biased (the merge probability
+    /// is approximated; see the README); off by default.
+    #[arg(long, default_value_t = 0.0)]
+    pub density_estimation: f64,
+    /// Share of merges (the rest are connections) in the density-estimation move.
+    #[arg(long, default_value_t = 0.5)]
+    pub merge_share: f64,
+    /// Merge radius, as a fraction of the scene's bounding-sphere radius.
+    #[arg(long, default_value_t = 0.01)]
+    pub merge_radius: f64,
+    /// Light subpaths in the light-vertex map (rebuilt every round).
+    #[arg(long, default_value_t = 20_000)]
+    pub merge_light_paths: usize,
+    /// A merge chooses among at most this many stored vertices (lookups finding more are
+    /// counted in the summary: they bias the merge density).
+    #[arg(long, default_value_t = 16)]
+    pub merge_cap: usize,
+    /// Combine merges and connections by eq. 28 (each its own density) instead of eq. 29.
+    #[arg(long)]
+    pub merge_per_component: bool,
 }
 
 impl CmltArgs {
@@ -71,6 +94,19 @@ impl CmltArgs {
             pathspace: self.pathspace,
             mutations: a.pathspace.mutations(c, m, &a.pathspace.mutations)?,
             pilot: self.cmlt_pilot,
+            density_estimation: DensityEstimation {
+                probability: self.density_estimation,
+                merge_share: self.merge_share,
+                radius: self.merge_radius,
+                light_paths: self.merge_light_paths,
+                cap: self.merge_cap,
+                rule: if self.merge_per_component {
+                    IndependenceRule::PerComponent
+                } else {
+                    IndependenceRule::Expected
+                },
+                ..DensityEstimation::default()
+            },
         };
         Ok(Cmlt::new(scene, settings)?)
     }
