@@ -21,7 +21,7 @@
 //! merging, `P_merge ≈ π r² p_→(y_{s−1} → z_{t−1})` (the area density of that step at
 //! `z_{t−1}`): exact as `r → 0` on a smooth surface; near edges, corners and where `p_→` varies
 //! within `r` it is biased. In the charts' measure `I(f) dμ` this is
-//! `p_de = m(x̄) / I(C*_s)` with the **merge factor** `m = π r² p_→ N / cap`.
+//! `p_de = m(x̄) / I(C*_s)` with the **merge factor** `m = P_merge N / cap`.
 //!
 //! Three approximations remain, each measured by the tests: `P_merge` (above); a shared map
 //! (rebuilt every round) stands in for fresh subpaths per proposal — conditioned on one map, the
@@ -74,9 +74,9 @@ impl Default for DensityEstimation {
         Self {
             probability: 0.0,
             merge_share: 0.5,
-            radius: 0.01,
+            radius: 0.005,
             light_paths: 20_000,
-            cap: 16,
+            cap: 4,
             min_normal_cos: 0.9,
             rule: IndependenceRule::Expected,
         }
@@ -201,7 +201,10 @@ impl MergeSampler<'_> {
         let p = v[s - 1].pdf(self.scene, prev, z);
         let r = self.settings.radius_in(self.scene);
         let n = self.light_paths();
-        let m = std::f64::consts::PI * r * r * p * n / self.settings.cap as f64;
+        // A probability: at most 1 (the disc approximation exceeds it where y_{s−1} is within a
+        // few radii of z_{t−1}, in corners).
+        let p_merge = (std::f64::consts::PI * r * r * p).min(1.0);
+        let m = p_merge * n / self.settings.cap as f64;
         if m > 0.0 && m.is_finite() {
             m.ln()
         } else {

@@ -61,15 +61,16 @@ pub struct CmltArgs {
     /// Share of merges (the rest are connections) in the density-estimation move.
     #[arg(long, default_value_t = 0.5)]
     pub merge_share: f64,
-    /// Merge radius, as a fraction of the scene's bounding-sphere radius.
-    #[arg(long, default_value_t = 0.01)]
+    /// Merge radius, as a fraction of the scene's bounding-sphere radius (the merge density's
+    /// bias grows with it).
+    #[arg(long, default_value_t = 0.005)]
     pub merge_radius: f64,
     /// Light subpaths in the light-vertex map (rebuilt every round).
     #[arg(long, default_value_t = 20_000)]
     pub merge_light_paths: usize,
     /// A merge chooses among at most this many stored vertices (lookups finding more are
     /// counted in the summary: they bias the merge density).
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 4)]
     pub merge_cap: usize,
     /// Combine merges and connections by eq. 28 (each its own density) instead of eq. 29.
     #[arg(long)]
