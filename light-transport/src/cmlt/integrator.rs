@@ -561,7 +561,7 @@ impl Method for Cmlt {
             .and_then(|m| m.as_ref().map(|m| m.vertices()))
             .unwrap_or(0);
         vec![format!(
-            "density estimation: {} light paths ({} vertices) per map, radius {}, cap {}; {:.1}% of merges found a vertex, {:.2} on average, {:.3}% over the cap",
+            "density estimation (approximate merge density: slightly biased, more so at larger radii): {} light paths ({} vertices) per map, radius {}, cap {}; {:.1}% of merges found a vertex, {:.2} on average, {:.3}% over the cap",
             de.light_paths,
             vertices,
             de.radius,

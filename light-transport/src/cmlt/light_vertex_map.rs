@@ -39,6 +39,9 @@ impl std::fmt::Debug for LightVertexMap {
     }
 }
 
+/// A stored vertex while the map is built: subpath, position, normal.
+type Found = (u32, DVec3, DVec3);
+
 /// Subpaths traced per parallel task (the map is the same for any thread count).
 const CHUNK: usize = 256;
 
@@ -53,7 +56,7 @@ impl LightVertexMap {
             });
         }
         let stride = light_numbers(max_depth + 1);
-        let traced: Vec<(Vec<f64>, Vec<Vec<(u32, DVec3, DVec3)>>)> = (0..paths)
+        let traced: Vec<(Vec<f64>, Vec<Vec<Found>>)> = (0..paths)
             .collect::<Vec<_>>()
             .par_chunks(CHUNK)
             .map(|chunk| {
@@ -76,7 +79,7 @@ impl LightVertexMap {
             })
             .collect();
         let mut numbers = Vec::with_capacity(paths * stride);
-        let mut per_depth: Vec<Vec<(u32, DVec3, DVec3)>> = vec![Vec::new(); max_depth];
+        let mut per_depth: Vec<Vec<Found>> = vec![Vec::new(); max_depth];
         for (n, found) in traced {
             numbers.extend(n);
             for (d, f) in found.into_iter().enumerate() {

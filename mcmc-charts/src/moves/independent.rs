@@ -11,7 +11,8 @@
 //!
 //! * [`IndependenceRule::Expected`] (eq. 29): `Q_i = λ q_i + (1 − λ) p_i`, the density of the
 //!   mixture as a whole ("state-independent mixing", Geyer 2011). The rule does not depend on which
-//!   component drew `y`, and accepts at least as often as the other rule on average.
+//!   component drew `y`, and dominates the other rule in Peskun's order (Tierney 1998: a sum of
+//!   minima is at most the minimum of the sums), so it accepts at least as often.
 //! * [`IndependenceRule::PerComponent`] (eq. 28 for the outside sampler, the large step for the
 //!   chart): each component is its own independence sampler, `Q_i = q_i` or `Q_i = p_i` according
 //!   to which drew `y`. A mixture of two valid kernels; same invariant law, lower acceptance.
