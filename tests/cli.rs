@@ -112,6 +112,31 @@ fn every_subcommand_runs_on_a_tiny_image() {
         &o("cmlt-replica.exr"),
     ]));
     assert!(ok && out.contains("replica exchange"), "{out}{e}");
+    // Density estimation in CMLT: the merge statistics and the bias warning are printed.
+    let (ok, out, e) = run(charted().args([
+        "render",
+        "cornell",
+        "--algo",
+        "cmlt",
+        "--density-estimation",
+        "0.3",
+        "--merge-light-paths",
+        "2000",
+        "--spp",
+        "4",
+        "--resolution",
+        "24x16",
+        "--bootstrap",
+        "2000",
+        "--chains",
+        "64",
+        "-o",
+        &o("cmlt-de.exr"),
+    ]));
+    assert!(
+        ok && out.contains("density estimation: merge") && out.contains("slightly biased"),
+        "{out}{e}"
+    );
     // Photon mapping reports its maps; a bad setting is a clear error.
     let (ok, out, e) = run(charted().args([
         "render",
@@ -305,6 +330,30 @@ fn bad_input_gives_clear_errors() {
                 "tempering".into(),
             ],
             "tempering",
+        ),
+        (
+            vec![
+                "render".into(),
+                "--algo".into(),
+                "cmlt".into(),
+                "--density-estimation".into(),
+                "0.3".into(),
+                "--merge-radius".into(),
+                "0".into(),
+            ],
+            "merge radius",
+        ),
+        (
+            vec![
+                "render".into(),
+                "--algo".into(),
+                "cmlt".into(),
+                "--density-estimation".into(),
+                "0.8".into(),
+                "--ipsm".into(),
+                "0.4".into(),
+            ],
+            "sum to",
         ),
         (
             vec![
