@@ -215,7 +215,7 @@ impl MergeSampler<'_> {
 
 impl PointSampler<PathState> for MergeSampler<'_> {
     fn draw(&self, s: usize, y: &mut PathState, rng: &mut ChainRng) -> bool {
-        let (k, st) = (self.k, &self.settings);
+        let st = &self.settings;
         let Some(chart) = self.chart(s) else {
             return false;
         };
@@ -244,23 +244,28 @@ impl PointSampler<PathState> for MergeSampler<'_> {
             return false;
         }
         // The light vertices near it.
-        let fresh;
-        let map: &LightVertexMap = match &self.vertices {
-            LightVertices::Shared(m) => m,
+        let r = st.radius_in(self.scene);
+        let mut near = Vec::new();
+        let fresh_seed = match &self.vertices {
+            LightVertices::Shared(map) => {
+                map.near(s, z.p(), z.n(), r, st.min_normal_cos, &mut near);
+                None
+            }
             LightVertices::FreshPerProposal => {
                 let seed = (uniform(rng) * 2f64.powi(53)) as u64;
-                match LightVertexMap::build(self.scene, k - 1, st.light_paths, seed) {
-                    Ok(m) => {
-                        fresh = m;
-                        &fresh
-                    }
-                    Err(_) => return false,
-                }
+                LightVertexMap::near_fresh(
+                    self.scene,
+                    s,
+                    (z.p(), z.n()),
+                    r,
+                    st.min_normal_cos,
+                    st.light_paths,
+                    seed,
+                    &mut near,
+                );
+                Some(seed)
             }
         };
-        let mut near = Vec::new();
-        let r = st.radius_in(self.scene);
-        map.near(s, z.p(), z.n(), r, st.min_normal_cos, &mut near);
         if let Some(c) = &self.counters {
             if !near.is_empty() {
                 c.found.fetch_add(1, Ordering::Relaxed);
@@ -275,7 +280,15 @@ impl PointSampler<PathState> for MergeSampler<'_> {
             return false;
         };
         // The candidate: the stored subpath's first s vertices, connected to the camera subpath.
-        u.extend_from_slice(&map.numbers(j)[..light_numbers(s)]);
+        let n = light_numbers(s);
+        match (&self.vertices, fresh_seed) {
+            (LightVertices::Shared(map), _) => u.extend_from_slice(&map.numbers(j)[..n]),
+            (_, Some(seed)) => {
+                u.resize(nc + n, 0.0);
+                LightVertexMap::fresh_numbers(seed, j, &mut u[nc..]);
+            }
+            _ => return false,
+        }
         chart.forward(&u, y)
     }
 

@@ -111,6 +111,60 @@ impl LightVertexMap {
         })
     }
 
+    /// Without building a map: the subpaths `j < paths` of stream key `seed` (the ones
+    /// [`LightVertexMap::build`] would trace) whose depth-`s` vertex is near `p`, as
+    /// [`LightVertexMap::near`] would find them (in subpath order), into `out`. For a fresh map
+    /// per lookup (tests): no tree, and only `s + 1` vertices traced per subpath.
+    #[allow(clippy::too_many_arguments)]
+    pub fn near_fresh(
+        scene: &Scene,
+        s: usize,
+        (p, n): (DVec3, DVec3),
+        radius: f64,
+        min_cos: f64,
+        paths: usize,
+        seed: u64,
+        out: &mut Vec<u32>,
+    ) {
+        out.clear();
+        let len = light_numbers(s + 1);
+        let found: Vec<Vec<u32>> = (0..paths as u32)
+            .collect::<Vec<_>>()
+            .par_chunks(CHUNK)
+            .map(|chunk| {
+                let mut numbers = vec![0.0; len];
+                let mut sub = Vec::new();
+                let mut hits = Vec::new();
+                for &j in chunk {
+                    Self::fresh_numbers(seed, j, &mut numbers);
+                    light_subpath(
+                        scene,
+                        &mut ReplayStream::new(&[], &numbers, &[]),
+                        s + 1,
+                        &mut sub,
+                    );
+                    if let Some(v) = sub.get(s)
+                        && v.kind == VertexKind::Surface
+                        && v.connectible()
+                        && v.p().distance_squared(p) <= radius * radius
+                        && v.n().dot(n) >= min_cos
+                    {
+                        hits.push(j);
+                    }
+                }
+                hits
+            })
+            .collect();
+        out.extend(found.into_iter().flatten());
+    }
+
+    /// The first `out.len()` numbers of subpath `j` of stream key `seed` (as in
+    /// [`LightVertexMap::build`]).
+    pub fn fresh_numbers(seed: u64, j: u32, out: &mut [f64]) {
+        let mut rng = stream(seed, j as u64);
+        out.iter_mut().for_each(|v| *v = uniform(&mut rng));
+    }
+
     /// Light subpaths traced (`N`).
     pub fn paths(&self) -> usize {
         self.paths
