@@ -28,13 +28,15 @@ use common::{
 use light_transport::cmlt::{
     Cmlt, CmltSettings, CmltState, DensityEstimation, SwapKind, TechniqueChart,
 };
-use light_transport::film::Film;
 use light_transport::film::Image;
-use light_transport::metropolis::{ImportanceKind, Method, MetropolisSettings};
+use light_transport::film::{Film, Splat};
+use light_transport::metropolis::{
+    ImportanceKind, Method, MetropolisSettings, Recorder, Sink, run_with,
+};
 use light_transport::scene::{Scene, builtin};
 use mcmc_charts::Chart;
 use mcmc_charts::Joint;
-use mcmc_core::kernel::{FnObserver, Observer};
+use mcmc_core::kernel::Observer;
 use mcmc_core::proposals::{Mixture, MixtureRule};
 use mcmc_core::rng::uniform;
 use mcmc_core::{Chain, ChainRng, Stats};
@@ -118,8 +120,9 @@ fn cmlt_with_ipsm_and_path_space_mutations_converges_to_bdpt() {
 }
 
 /// With density estimation mixed in (30% of mutations; eq. 29, half merges; the default radius,
-/// 0.5% of the bounding-sphere radius, and cap 4; maps of 20 000 light subpaths rebuilt every
-/// round), on every built-in scene. The merge density is approximate (`π r² p_→` for the merge
+/// 0.5% of the bounding-sphere radius, and cap 4; maps of 5000 light subpaths rebuilt every
+/// round — the test's rounds are short, and the maps would take most of its time), on every
+/// built-in scene. The merge density is approximate (`π r² p_→` for the merge
 /// probability, and a shared map): at this radius its bias is below what 8 runs × 32 mutations
 /// per pixel can see (`density_estimation_bias_shrinks_with_the_radius` measures it).
 #[test]
@@ -129,7 +132,7 @@ fn cmlt_with_density_estimation_converges_to_bdpt_on_every_builtin_scene() {
         let mut st = cmlt_settings(SwapKind::SerialTempering, 0.0, 0.0);
         st.density_estimation = DensityEstimation {
             probability: 0.3,
-            light_paths: 20_000,
+            light_paths: 5000,
             ..Default::default()
         };
         let m = Cmlt::new(&scene, st).unwrap();
@@ -343,51 +346,39 @@ impl Method for ExchangeWithoutRatio {
     }
 }
 
-/// Records only the chains of chart `s`: under replica exchange every chain keeps its chart, so
-/// this is the image of technique `s` (summed over path lengths), `Σ_k ∫ f w_{k,s}`.
-struct OnlyChart<M>(M, usize);
+/// Splats by the chart of the state that deposits them: under replica exchange every chain keeps
+/// its chart (IPSM and path-space moves in their chart-keeping form too), so film `s` is the image
+/// of technique `s` (summed over path lengths), `Σ_k ∫ f w_{k,s}` — all charts from one run.
+struct PerChart {
+    films: Vec<Film>,
+}
 
-impl<M: Method<State = CmltState>> Method for OnlyChart<M> {
-    type State = CmltState;
-    fn groups(&self) -> usize {
-        self.0.groups()
+struct ChartSplats(Vec<(usize, Splat)>);
+
+impl Recorder<CmltState> for ChartSplats {
+    fn record(&mut self, state: &CmltState, weight: f64) {
+        for &(r, v) in &state.x.contribution.splats {
+            self.0.push((state.chart, (r, v * weight)));
+        }
     }
-    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (CmltState, f64) {
-        self.0.independent(scene, g, seed)
+}
+
+impl Sink<CmltState> for PerChart {
+    type Chunk = ChartSplats;
+    fn chunk(&self) -> ChartSplats {
+        ChartSplats(Vec::new())
     }
-    fn ln_density(&self, scene: &Scene, s: &CmltState) -> f64 {
-        self.0.ln_density(scene, s)
-    }
-    fn mutate<O: Observer<CmltState>>(
-        &self,
-        scene: &Scene,
-        chain: &mut Chain<CmltState>,
-        n: u64,
-        rng: &mut ChainRng,
-        observer: &mut O,
-    ) {
-        let s = self.1;
-        let mut only = FnObserver(|c: &CmltState, p: &CmltState, a: f64, kind: usize| {
-            if c.chart == s {
-                observer.observe(c, p, a, kind);
+    fn absorb(&mut self, chunk: ChartSplats) {
+        for (c, (r, v)) in chunk.0 {
+            if let Some(f) = self.films.get_mut(c) {
+                f.add_splat(r, v);
             }
-        });
-        self.0.mutate(scene, chain, n, rng, &mut only);
+        }
     }
-    fn exchange_every(&self) -> Option<u64> {
-        self.0.exchange_every()
-    }
-    fn exchange(
-        &self,
-        scene: &Scene,
-        chains: &mut [Chain<CmltState>],
-        groups: &[usize],
-        rng: &mut ChainRng,
-    ) {
-        self.0.exchange(scene, chains, groups, rng);
-    }
-    fn kinds(&self) -> Vec<String> {
-        self.0.kinds()
+    fn mutations_done(&mut self, mutations: u64, pixels: f64) {
+        for f in &mut self.films {
+            f.splat_scale = mutations as f64 / pixels;
+        }
     }
 }
 
@@ -397,6 +388,7 @@ const TECHNIQUE_EDGES: usize = 4;
 /// Plain Monte Carlo image of technique `s` (all lengths up to [`TECHNIQUE_EDGES`]): uniform
 /// numbers in each chart, the path's balance-weighted value `f / Σ p` splatted — 16 independent
 /// batches of `spp` samples per pixel per chart.
+
 fn technique_batches(scene: &Scene, s: usize, spp: usize) -> Vec<Vec<f64>> {
     (0..16u64)
         .into_par_iter()
@@ -437,25 +429,49 @@ fn shape(mut v: Vec<f64>) -> Vec<f64> {
 }
 
 /// The smallest p-value over techniques `s = 0 ..= TECHNIQUE_EDGES` of chains of chart `s`
-/// (recorded alone) against plain Monte Carlo of technique `s`.
-fn per_technique_p<M: Method<State = CmltState> + Clone>(scene: &Scene, m: &M, label: &str) -> f64 {
+/// (recorded alone) against plain Monte Carlo of technique `s` (`references[s]`). Every chart's
+/// image comes from the same 8 runs (the chains do not depend on what is recorded).
+fn per_technique_p<M: Method<State = CmltState>>(
+    scene: &Scene,
+    m: &M,
+    label: &str,
+    references: &[Vec<Vec<f64>>],
+) -> f64 {
+    let settings = MetropolisSettings {
+        chains: 256,
+        ..settings(4000, 64.0, 211)
+    };
+    let runs: Vec<Vec<Vec<f64>>> = (0..8)
+        .map(|r| {
+            let mut sink = PerChart {
+                films: (0..=TECHNIQUE_EDGES).map(|_| Film::new(W, H)).collect(),
+            };
+            let s = MetropolisSettings {
+                seed: settings.seed + r,
+                ..settings
+            };
+            run_with(scene, m, &s, &mut sink, None, |_, _, _| true).unwrap();
+            sink.films
+                .iter()
+                .map(|f| shape(blocks(&Image::from_film(f))))
+                .collect()
+        })
+        .collect();
     (0..=TECHNIQUE_EDGES)
         .map(|s| {
-            let reference = technique_batches(scene, s, 16);
-            let settings = MetropolisSettings {
-                chains: 256,
-                ..settings(4000, 64.0, 211)
-            };
-            let runs = metropolis_runs(scene, &OnlyChart(m.clone(), s), settings, 8);
-            let images: Vec<Vec<f64>> = runs
-                .iter()
-                .map(|(film, _)| shape(blocks(&Image::from_film(film))))
-                .collect();
-            let p = min_p(&images, &reference);
+            let images: Vec<Vec<f64>> = runs.iter().map(|r| r[s].clone()).collect();
+            let p = min_p(&images, &references[s]);
             println!("{label}: technique s = {s}: p = {p:.3e}");
             p
         })
         .fold(1.0, f64::min)
+}
+
+/// Plain Monte Carlo of every technique `s = 0 ..= TECHNIQUE_EDGES` (16 batches each).
+fn technique_references(scene: &Scene) -> Vec<Vec<Vec<f64>>> {
+    (0..=TECHNIQUE_EDGES)
+        .map(|s| technique_batches(scene, s, 16))
+        .collect()
 }
 
 fn replica(scene: &Scene, ipsm: f64, pathspace: f64, swap_every: f64) -> Cmlt {
@@ -473,10 +489,11 @@ fn replica_exchange_chains_sample_their_own_technique() {
     // only permute paths among chains, so a wrong per-chart law can leave the population right.
     for name in ["caustic", "cornell", "door"] {
         let scene = scene(name);
+        let references = technique_references(&scene);
         for (ipsm, pathspace) in [(0.0, 0.0), (0.3, 0.0), (0.0, 0.3)] {
             let m = replica(&scene, ipsm, pathspace, 2.0);
             let label = format!("{name} ipsm {ipsm} pathspace {pathspace}");
-            let p = per_technique_p(&scene, &m, &label);
+            let p = per_technique_p(&scene, &m, &label, &references);
             assert!(
                 p > ALPHA,
                 "{label}: a chart's chains disagree with its technique (p = {p:.2e})"
@@ -491,7 +508,12 @@ fn an_exchange_without_the_acceptance_ratio_is_caught() {
     // tracing, the rest by next-event estimation), so mixing their paths shows.
     let scene = scene("caustic");
     let broken = ExchangeWithoutRatio(replica(&scene, 0.0, 0.0, 2.0));
-    let p = per_technique_p(&scene, &broken, "exchange without its ratio");
+    let p = per_technique_p(
+        &scene,
+        &broken,
+        "exchange without its ratio",
+        &technique_references(&scene),
+    );
     assert!(
         p < ALPHA,
         "the broken exchange was not caught (p = {p:.2e})"

@@ -82,31 +82,46 @@ const MAX_EDGES: usize = 4;
 
 #[test]
 fn every_technique_chart_of_every_builtin_scene_passes_the_checker() {
+    use rayon::prelude::*;
     let (mut failures, mut untestable, mut tested) = (Vec::new(), Vec::new(), 0);
-    for (n, name) in builtin::BUILTIN.iter().enumerate() {
-        let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((32, 24))).unwrap();
-        for (c, chart) in technique_charts(&scene, MAX_EDGES, ImportanceKind::Luminance)
-            .iter()
-            .enumerate()
-        {
-            let report = match check(chart, 1000 * n as u64 + c as u64) {
-                Ok(r) => r,
-                Err(why) => {
-                    untestable.push(format!("{name} {}: {why}", chart.name()));
-                    continue;
-                }
-            };
-            tested += 1;
-            println!(
-                "{name} {}: success {:.3}, round trip {:.1e}, uniformity p = {:.2e}",
-                chart.name(),
-                report.success_rate,
-                report.round_trip.statistic,
-                report.inverse_uniformity.statistic
-            );
-            if !report.passed() {
-                failures.push(format!("{name}: {report}"));
+    let scenes: Vec<Scene> = builtin::BUILTIN
+        .iter()
+        .map(|name| Scene::new(&builtin::builtin(name).unwrap(), Some((32, 24))).unwrap())
+        .collect();
+    // Every chart's check has its own seed: run them in parallel, report in order.
+    let charts: Vec<(usize, usize, TechniqueChart<'_>)> = scenes
+        .iter()
+        .enumerate()
+        .flat_map(|(n, scene)| {
+            technique_charts(scene, MAX_EDGES, ImportanceKind::Luminance)
+                .into_iter()
+                .enumerate()
+                .map(move |(c, chart)| (n, c, chart))
+        })
+        .collect();
+    let reports: Vec<_> = charts
+        .par_iter()
+        .map(|(n, c, chart)| check(chart, 1000 * *n as u64 + *c as u64))
+        .collect();
+    for ((n, _, chart), report) in charts.iter().zip(reports) {
+        let name = builtin::BUILTIN[*n];
+        let report = match report {
+            Ok(r) => r,
+            Err(why) => {
+                untestable.push(format!("{name} {}: {why}", chart.name()));
+                continue;
             }
+        };
+        tested += 1;
+        println!(
+            "{name} {}: success {:.3}, round trip {:.1e}, uniformity p = {:.2e}",
+            chart.name(),
+            report.success_rate,
+            report.round_trip.statistic,
+            report.inverse_uniformity.statistic
+        );
+        if !report.passed() {
+            failures.push(format!("{name}: {report}"));
         }
     }
     println!(
