@@ -388,7 +388,6 @@ const TECHNIQUE_EDGES: usize = 4;
 /// Plain Monte Carlo image of technique `s` (all lengths up to [`TECHNIQUE_EDGES`]): uniform
 /// numbers in each chart, the path's balance-weighted value `f / Σ p` splatted — 16 independent
 /// batches of `spp` samples per pixel per chart.
-
 fn technique_batches(scene: &Scene, s: usize, spp: usize) -> Vec<Vec<f64>> {
     (0..16u64)
         .into_par_iter()
