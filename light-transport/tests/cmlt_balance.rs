@@ -396,56 +396,72 @@ fn density_estimation_keeps_the_joint_target() {
         let (merge, conn) = (k(2), k(3));
         let rate = |s: &mcmc_core::KindStats| s.accepted as f64 / s.proposed.max(1) as f64;
         let made = merge.proposed - merge.failed;
-        println!(
-            "  merges: {} proposed, {} made, {} accepted ({:.1}% of those made); connections: {:.1}% accepted",
+        let line = format!(
+            "merges: {} proposed, {} made, {} accepted ({:.1}% of those made); connections: {:.1}% accepted",
             merge.proposed,
             made,
             merge.accepted,
             100.0 * merge.accepted as f64 / made.max(1) as f64,
             100.0 * rate(&conn),
         );
-        (r.passed, r.to_string(), merge.accepted)
+        (r.passed, format!("{r}\n  {line}"), merge.accepted)
     };
     let expected = merge_settings(0.8, IndependenceRule::Expected);
     let per_component = merge_settings(0.8, IndependenceRule::PerComponent);
-    let (ok, report, accepted) = run(
-        Box::new(ChartIndependence::new(
-            &target,
-            merge_sampler(&expected),
-            0.8,
-            expected.rule,
-        )),
-        31,
-        4000,
+    // The three checks are independent (own seeds): run them side by side.
+    let ((eq29, eq28), broken) = rayon::join(
+        || {
+            rayon::join(
+                || {
+                    run(
+                        Box::new(ChartIndependence::new(
+                            &target,
+                            merge_sampler(&expected),
+                            0.8,
+                            expected.rule,
+                        )),
+                        31,
+                        4000,
+                    )
+                },
+                || {
+                    run(
+                        Box::new(ChartIndependence::new(
+                            &target,
+                            merge_sampler(&per_component),
+                            0.8,
+                            per_component.rule,
+                        )),
+                        32,
+                        4000,
+                    )
+                },
+            )
+        },
+        || {
+            run(
+                Box::new(ChartIndependence::new(
+                    &target,
+                    MergeAsConnection(merge_sampler(&expected)),
+                    0.8,
+                    expected.rule,
+                )),
+                33,
+                10_000,
+            )
+        },
     );
+    let (ok, report, accepted) = eq29;
     println!("eq. 29: {report}");
     assert!(ok, "{report}");
     assert!(
         accepted > 500,
         "too few merges accepted ({accepted}) for the check to see them"
     );
-    let (ok, report, _) = run(
-        Box::new(ChartIndependence::new(
-            &target,
-            merge_sampler(&per_component),
-            0.8,
-            per_component.rule,
-        )),
-        32,
-        4000,
-    );
+    let (ok, report, _) = eq28;
     println!("eq. 28: {report}");
     assert!(ok, "{report}");
-    let (ok, report, _) = run(
-        Box::new(ChartIndependence::new(
-            &target,
-            MergeAsConnection(merge_sampler(&expected)),
-            0.8,
-            expected.rule,
-        )),
-        33,
-        10_000,
-    );
+    let (ok, report, _) = broken;
     println!("merges taken for connections: {report}");
     assert!(
         !ok,

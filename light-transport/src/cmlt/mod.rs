@@ -1,5 +1,6 @@
 //! Charted Metropolis light transport in the renderer (charted-MLT paper §5–6): the bidirectional
-//! techniques as [`mcmc_charts`] charts with exact path inversion.
+//! techniques as [`mcmc_charts`] charts with exact path inversion, and density estimation as an
+//! independence sampler in those charts (§5.3).
 
 pub mod density_estimation;
 pub mod integrator;
