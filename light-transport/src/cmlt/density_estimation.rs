@@ -226,6 +226,11 @@ impl PointSampler<PathState> for MergeSampler<'_> {
         if let Some(c) = &self.counters {
             c.proposals.fetch_add(1, Ordering::Relaxed);
         }
+        if let LightVertices::Shared(map) = &self.vertices
+            && map.vertices_at(s) == 0
+        {
+            return false; // nothing to merge with at this depth
+        }
         // The fresh camera subpath and its last vertex z_{t−1}.
         let nc = camera_numbers(t);
         let mut u: Vec<f64> = (0..nc).map(|_| uniform(rng)).collect();
