@@ -6,7 +6,7 @@ use super::direct::{mis, next_event};
 use super::{Estimator, Splat};
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, offset_origin};
-use crate::path::MisHeuristic;
+use crate::path::{MisHeuristic, camera_ray};
 use crate::sampler::{CAMERA_STREAM, IndependentStream, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -42,12 +42,7 @@ impl Estimator for PathTracer {
         stream: &mut IndependentStream,
         _splats: &mut Vec<Splat>,
     ) -> Rgb {
-        stream.start_stream(CAMERA_STREAM);
-        stream.seek(layout::FILM);
-        let film = scene.camera.film_position(pixel, stream.next_2d());
-        stream.seek(layout::LENS);
-        let lens = stream.next_2d();
-        let cs = scene.camera.sample_ray(film, lens);
+        let cs = camera_ray(scene, stream, Some(pixel));
         if cs.we == 0.0 {
             return Rgb::BLACK;
         }

@@ -6,6 +6,7 @@
 
 use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
+use crate::camera::CameraSample;
 use crate::geometry::{Ray, offset_origin};
 use crate::sampler::{
     CAMERA_BLOCK, CAMERA_STREAM, LIGHT_BLOCK, LIGHT_STREAM, SampleStream, layout,
@@ -31,6 +32,24 @@ impl WalkSettings {
     }
 }
 
+/// The camera ray of a sample: the film numbers (inside `pixel`, or over the whole film) and the
+/// lens numbers of the camera substream's endpoint block. Every camera-side estimator starts here.
+pub fn camera_ray<S: SampleStream>(
+    scene: &Scene,
+    stream: &mut S,
+    pixel: Option<usize>,
+) -> CameraSample {
+    stream.start_stream(CAMERA_STREAM);
+    stream.seek(layout::FILM);
+    let mut film = stream.next_2d();
+    stream.seek(layout::LENS);
+    let lens = stream.next_2d();
+    if let Some(p) = pixel {
+        film = scene.camera.film_position(p, film);
+    }
+    scene.camera.sample_ray(film, lens)
+}
+
 /// Trace a camera subpath of at most `max_vertices` vertices into `path` (cleared first). With
 /// `pixel`, the film numbers place the sample inside that pixel; without, over the whole film.
 pub fn camera_subpath<S: SampleStream>(
@@ -44,15 +63,7 @@ pub fn camera_subpath<S: SampleStream>(
     if max_vertices == 0 {
         return;
     }
-    stream.start_stream(CAMERA_STREAM);
-    stream.seek(layout::FILM);
-    let mut film = stream.next_2d();
-    stream.seek(layout::LENS);
-    let lens = stream.next_2d();
-    if let Some(p) = pixel {
-        film = scene.camera.film_position(p, film);
-    }
-    let cs = scene.camera.sample_ray(film, lens);
+    let cs = camera_ray(scene, stream, pixel);
     path.push(Vertex {
         kind: VertexKind::Camera,
         point: scene.camera.lens_point(cs.ray.o),

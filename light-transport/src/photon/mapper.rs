@@ -23,8 +23,8 @@ use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, offset_origin};
 use crate::integrators::direct::{mis, next_event};
 use crate::integrators::{Estimator, Splat};
-use crate::path::MisHeuristic;
-use crate::sampler::{CAMERA_STREAM, IndependentStream, SampleStream, layout};
+use crate::path::{MisHeuristic, camera_ray};
+use crate::sampler::IndependentStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use mcmc_core::rng::uniform;
@@ -339,12 +339,7 @@ impl Estimator for PhotonMapper {
         stream: &mut IndependentStream,
         _splats: &mut Vec<Splat>,
     ) -> Rgb {
-        stream.start_stream(CAMERA_STREAM);
-        stream.seek(layout::FILM);
-        let film = scene.camera.film_position(pixel, stream.next_2d());
-        stream.seek(layout::LENS);
-        let lens = stream.next_2d();
-        let cs = scene.camera.sample_ray(film, lens);
+        let cs = camera_ray(scene, stream, Some(pixel));
         if cs.we == 0.0 {
             return Rgb::BLACK;
         }
