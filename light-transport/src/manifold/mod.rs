@@ -6,7 +6,7 @@
 //! * [`chain`] — a chain's vertices as the manifold sees them (differential geometry, reflection or
 //!   refraction with its relative index, the glossy offset `o` of eq. 11) and the scattering
 //!   direction that a given half vector prescribes;
-//! * [`constraint`] — the constraint `c_i` of eq. 6–7 and its Jacobian blocks;
+//! * [`constraint`](mod@constraint) — the constraint `c_i` of eq. 6–7 and its Jacobian blocks;
 //! * [`tridiagonal`] — the O(n) block-tridiagonal solve (2×2 blocks), with a dense fallback;
 //! * [`geometry_term`] — the tangent map `−A⁻¹B` and the generalised geometry term (eq. 9);
 //! * [`walk`] — the predictor–corrector walk of §4 and its statistics;
