@@ -141,41 +141,44 @@ fn each_manifold_direction_with_new_paths_converges_to_bdpt() {
 
 #[test]
 fn mept_converges_to_bdpt_on_every_builtin_scene() {
-    for name in builtin::BUILTIN {
-        let scene = scene(name);
-        let mut s = ErptSettings::new(MAX_EDGES);
-        s.chain_length = 16;
-        s.pilot = 2048;
-        s.mutations = mutations(MutationProbabilities::manifold());
-        // The pool's seeds need 16 per pixel (rare bright caustic paths, see `pathspace.rs`);
-        // an eighth of a chain per seed keeps its cost near the other scenes'.
-        if name.starts_with("pool") {
-            s.chains_per_seed = 0.125;
-        }
-        let mept = Erpt::new(&scene, s).unwrap();
-        let spp = if name.starts_with("pool") { 16.0 } else { 4.0 };
-        let t = std::time::Instant::now();
-        let images: Vec<Vec<f64>> = (0..8)
-            .map(|r| {
-                let (film, _) = render(
-                    &scene,
-                    &mept,
-                    Budget::SamplesPerPixel(spp),
-                    900 + r,
-                    |_, _| true,
-                );
-                assert_eq!(film.discarded, 0);
-                blocks(&Image::from_film(&film))
-            })
-            .collect();
-        let p = min_p(&images, &bdpt_batches(&scene));
-        let (stats, chains) = mept.statistics();
-        report(
-            name,
-            &format!("mept ({:.1} s)", t.elapsed().as_secs_f64()),
-            p,
-            &stats,
-        );
+    use rayon::prelude::*;
+    // The scenes are independent (own seeds): run them side by side, report in order.
+    let results: Vec<_> = builtin::BUILTIN
+        .par_iter()
+        .map(|name| {
+            let scene = scene(name);
+            let mut s = ErptSettings::new(MAX_EDGES);
+            s.chain_length = 16;
+            s.pilot = 2048;
+            s.mutations = mutations(MutationProbabilities::manifold());
+            // The pool's seeds need 16 per pixel (rare bright caustic paths, see `pathspace.rs`);
+            // an eighth of a chain per seed keeps its cost near the other scenes'.
+            if name.starts_with("pool") {
+                s.chains_per_seed = 0.125;
+            }
+            let mept = Erpt::new(&scene, s).unwrap();
+            let spp = if name.starts_with("pool") { 16.0 } else { 4.0 };
+            let t = std::time::Instant::now();
+            let images: Vec<Vec<f64>> = (0..8)
+                .map(|r| {
+                    let (film, _) = render(
+                        &scene,
+                        &mept,
+                        Budget::SamplesPerPixel(spp),
+                        900 + r,
+                        |_, _| true,
+                    );
+                    assert_eq!(film.discarded, 0);
+                    blocks(&Image::from_film(&film))
+                })
+                .collect();
+            let p = min_p(&images, &bdpt_batches(&scene));
+            let (stats, chains) = mept.statistics();
+            (name, t.elapsed().as_secs_f64(), p, stats, chains)
+        })
+        .collect();
+    for (name, secs, p, stats, chains) in results {
+        report(name, &format!("mept ({secs:.1} s)"), p, &stats);
         assert!(chains > 0);
         assert!(p > ALPHA, "{name}: MEPT disagrees with BDPT (p = {p:.2e})");
     }

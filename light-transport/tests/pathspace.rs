@@ -328,23 +328,31 @@ fn erpt_runs<E: Estimator>(scene: &Scene, e: &E, spp: f64) -> Vec<Vec<f64>> {
 /// pool scenes get 16.
 #[test]
 fn erpt_converges_to_bdpt_on_every_builtin_scene() {
-    for name in builtin::BUILTIN {
-        let scene = scene(name);
-        let mut settings = erpt_settings();
-        // A quarter of a chain per seed keeps the pool's 16 seeds per pixel near the cost of the
-        // other scenes' 4 (the seeds, not the chains, carry the heavy tail).
-        if name.starts_with("pool") {
-            settings.chains_per_seed = 0.25;
-        }
-        let erpt = Erpt::new(&scene, settings).unwrap();
-        let spp = if name.starts_with("pool") { 16.0 } else { 4.0 };
-        let t = std::time::Instant::now();
-        let p = min_p(&erpt_runs(&scene, &erpt, spp), &bdpt_batches(&scene));
-        println!("{name}: {:.1} s", t.elapsed().as_secs_f64());
-        let (stats, chains) = erpt.statistics();
+    use rayon::prelude::*;
+    // The scenes are independent (own seeds): run them side by side, report in order.
+    let results: Vec<_> = builtin::BUILTIN
+        .par_iter()
+        .map(|name| {
+            let scene = scene(name);
+            let mut settings = erpt_settings();
+            // A quarter of a chain per seed keeps the pool's 16 seeds per pixel near the cost of
+            // the other scenes' 4 (the seeds, not the chains, carry the heavy tail).
+            if name.starts_with("pool") {
+                settings.chains_per_seed = 0.25;
+            }
+            let erpt = Erpt::new(&scene, settings).unwrap();
+            let spp = if name.starts_with("pool") { 16.0 } else { 4.0 };
+            let t = std::time::Instant::now();
+            let p = min_p(&erpt_runs(&scene, &erpt, spp), &bdpt_batches(&scene));
+            let secs = t.elapsed().as_secs_f64();
+            let (stats, chains) = erpt.statistics();
+            (name, secs, p, erpt.quantum, stats, chains)
+        })
+        .collect();
+    for (name, secs, p, quantum, stats, chains) in results {
+        println!("{name}: {secs:.1} s");
         println!(
-            "{name}: p = {p:.3e}, e_d = {:.3e}, {chains} chains, acceptance {:.1}%",
-            erpt.quantum,
+            "{name}: p = {p:.3e}, e_d = {quantum:.3e}, {chains} chains, acceptance {:.1}%",
             100.0 * stats.total().acceptance_rate()
         );
         assert!(chains > 0);
