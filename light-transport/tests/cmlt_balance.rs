@@ -146,9 +146,24 @@ fn step<K2: Kernel<CmltState>>(
     s: &mut CmltState,
     rng: &mut ChainRng,
 ) {
+    steps(joint, kernel, s, rng, 1, &mut mcmc_core::Stats::default());
+}
+
+/// `n` kernel steps from `s`, their move statistics added to `stats`.
+fn steps<K2: Kernel<CmltState>>(
+    joint: &TechniqueJoint<'_>,
+    kernel: &mut K2,
+    s: &mut CmltState,
+    rng: &mut ChainRng,
+    n: usize,
+    stats: &mut mcmc_core::Stats,
+) {
     let l = joint.evaluate(s);
     let mut c = Chain::unchecked(std::mem::take(s), l);
-    kernel.step(&mut c, rng, &mut ());
+    for _ in 0..n {
+        kernel.step(&mut c, rng, &mut ());
+    }
+    stats.merge(&c.stats);
     *s = c.state;
 }
 
@@ -203,13 +218,7 @@ fn the_cmlt_move_set_keeps_the_joint_target() {
     let mut stats = mcmc_core::Stats::default();
     let r = exchangeability(
         |rng: &mut ChainRng| exact_draw(&joint, bound, rng),
-        |s: &mut CmltState, rng: &mut ChainRng| {
-            let l = joint.evaluate(s);
-            let mut c = Chain::unchecked(std::mem::take(s), l);
-            kernel.step(&mut c, rng, &mut ());
-            stats.merge(&c.stats);
-            *s = c.state;
-        },
+        |s: &mut CmltState, rng: &mut ChainRng| steps(&joint, &mut kernel, s, rng, 1, &mut stats),
         cell,
         grid.cells() * (K + 1),
         &ExchangeabilityConfig {
@@ -373,13 +382,7 @@ fn density_estimation_keeps_the_joint_target() {
         let r = invariance(
             |rng: &mut ChainRng| exact_draw_in(&joint, bound, Some(1), rng),
             |s: &mut CmltState, rng: &mut ChainRng| {
-                let l = joint.evaluate(s);
-                let mut c = Chain::unchecked(std::mem::take(s), l);
-                for _ in 0..4 {
-                    kernel.step(&mut c, rng, &mut ());
-                }
-                stats.merge(&c.stats);
-                *s = c.state;
+                steps(&joint, &mut kernel, s, rng, 4, &mut stats)
             },
             features,
             &InvarianceConfig {
