@@ -1,10 +1,13 @@
 //! The bounding volume hierarchy: obvhs' compressed wide BVH (CWBVH, built with PLOC) over
 //! triangles and spheres. Traversal runs in f32 on boxes padded by a relative epsilon so rounding
-//! cannot lose a hit; primitives are intersected in f64 and the closest f64 hit is kept.
+//! cannot lose a hit; primitives are intersected in f64 and the closest f64 hit is kept. Triangles
+//! whose bounding box is mostly empty enter the BVH as several references ([`split`]).
 
 use crate::geometry::{Hit, Sphere, Triangle, TriangleShading};
 use crate::math::DVec3;
 use glam::Vec3A;
+mod split;
+
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::{CwBvh, builder::build_cwbvh};
@@ -98,14 +101,18 @@ fn count_ray() {
 /// The acceleration structure with its primitives.
 pub struct Bvh {
     bvh: CwBvh,
-    /// Primitives in the BVH's leaf order, so traversal reads them sequentially; a primitive's
-    /// index everywhere in the renderer is its position here.
+    /// Primitives in the order of their first reference in the BVH's leaves, so traversal reads
+    /// them mostly sequentially; a primitive's index everywhere in the renderer is its position
+    /// here.
     pub primitives: Vec<Primitive>,
     /// `original[i]`: the index primitive `i` had in the list given to [`Bvh::new`].
     pub original: Vec<u32>,
     /// Shading data of the triangles that have vertex normals ([`Triangle::shading`] indexes
     /// it).
     pub shading: Vec<TriangleShading>,
+    /// The primitive of each reference in the BVH's leaves (a triangle split by [`split`] has
+    /// several).
+    leaf: Vec<u32>,
 }
 
 fn to_f32(v: DVec3) -> Vec3A {
@@ -120,11 +127,22 @@ impl Bvh {
     }
 
     /// Build over `primitives` whose triangles refer to `shading` data.
-    pub fn with_shading(primitives: Vec<Primitive>, shading: Vec<TriangleShading>) -> Self {
-        let aabbs: Vec<Aabb> = primitives
+    pub fn with_shading(input: Vec<Primitive>, shading: Vec<TriangleShading>) -> Self {
+        // Boxes of the references: one per primitive, several for triangles whose box is
+        // mostly empty (`split`); `owner[r]` is the primitive of reference `r`.
+        let (mut boxes, mut owner) = (Vec::with_capacity(input.len()), Vec::new());
+        for (i, p) in input.iter().enumerate() {
+            let before = boxes.len();
+            match p {
+                Primitive::Triangle(t) => split::triangle_boxes(t.p, &mut boxes),
+                Primitive::Sphere(_) => boxes.push(p.bounds()),
+            }
+            owner.resize(boxes.len(), i as u32);
+            debug_assert!(boxes.len() > before);
+        }
+        let aabbs: Vec<Aabb> = boxes
             .iter()
-            .map(|p| {
-                let (lo, hi) = p.bounds();
+            .map(|&(lo, hi)| {
                 let pad = (hi - lo)
                     .max_element()
                     .max(lo.abs().max(hi.abs()).max_element())
@@ -145,13 +163,29 @@ impl Bvh {
                 &mut Duration::default(),
             )
         };
-        let original: Vec<u32> = bvh.primitive_indices.clone();
-        let primitives = original.iter().map(|&i| primitives[i as usize]).collect();
+        // Primitives are numbered by their first reference in leaf order, so traversal mostly
+        // reads them sequentially.
+        let mut canonical = vec![u32::MAX; input.len()];
+        let mut original = Vec::with_capacity(input.len());
+        let leaf: Vec<u32> = bvh
+            .primitive_indices
+            .iter()
+            .map(|&r| {
+                let i = owner[r as usize] as usize;
+                if canonical[i] == u32::MAX {
+                    canonical[i] = original.len() as u32;
+                    original.push(i as u32);
+                }
+                canonical[i]
+            })
+            .collect();
+        let primitives: Vec<Primitive> = original.iter().map(|&i| input[i as usize]).collect();
         Self {
             bvh,
             primitives,
             original,
             shading,
+            leaf,
         }
     }
 
@@ -178,10 +212,11 @@ impl Bvh {
         let mut rh = RayHit::none();
         self.bvh
             .ray_traverse(Self::bvh_ray(o, d, t_max), &mut rh, |_, id| {
-                match self.primitives[id].intersect_t(o, d, best_t) {
+                let index = self.leaf[id];
+                match self.primitives[index as usize].intersect_t(o, d, best_t) {
                     Some(h) => {
                         best_t = h.0;
-                        best = Some((h, id as u32));
+                        best = Some((h, index));
                         // Report a slightly larger f32 distance so traversal never culls a box whose
                         // f32 entry distance rounds above the f64 hit.
                         (h.0 * (1.0 + 1e-6)) as f32
@@ -203,7 +238,7 @@ impl Bvh {
         !self
             .bvh
             .ray_traverse_miss(Self::bvh_ray(o, d, t_max), |_, id| {
-                if self.primitives[id].hits(o, d, t_max) {
+                if self.primitives[self.leaf[id] as usize].hits(o, d, t_max) {
                     0.0
                 } else {
                     f32::INFINITY
@@ -260,7 +295,7 @@ mod tests {
         }
     }
 
-    /// The BVH finds exactly what brute force finds.
+    /// The BVH finds exactly what brute force finds, split triangles included.
     #[test]
     fn agrees_with_brute_force() {
         let mut rng = stream(3, 0);
@@ -280,6 +315,17 @@ mod tests {
                 shading: NO_SHADING,
             }));
         }
+        // Long diagonal slivers, which enter the BVH as several references each.
+        for _ in 0..100 {
+            let c = DVec3::new(r(), r(), r()) * 10.0;
+            let d = DVec3::new(r(), r(), r()) - DVec3::splat(0.5);
+            prims.push(Primitive::Triangle(Triangle {
+                p: [c, c + d * 8.0, c + d * 8.0 + DVec3::new(r(), r(), r()) * 0.3],
+                uv: [[0.0; 2]; 3],
+                flip: false,
+                shading: NO_SHADING,
+            }));
+        }
         for _ in 0..20 {
             prims.push(Primitive::Sphere(Sphere {
                 center: DVec3::new(r(), r(), r()) * 10.0,
@@ -288,7 +334,8 @@ mod tests {
             }));
         }
         let bvh = Bvh::new(prims.clone());
-        for _ in 0..2000 {
+        assert!(bvh.leaf.len() > prims.len() + 100, "{} references", bvh.leaf.len());
+        for _ in 0..4000 {
             let o = DVec3::new(r(), r(), r()) * 12.0 - DVec3::splat(1.0);
             let d = (DVec3::new(r(), r(), r()) - DVec3::splat(0.5)).normalize();
             let brute = prims
