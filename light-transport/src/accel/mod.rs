@@ -320,7 +320,11 @@ mod tests {
             let c = DVec3::new(r(), r(), r()) * 10.0;
             let d = DVec3::new(r(), r(), r()) - DVec3::splat(0.5);
             prims.push(Primitive::Triangle(Triangle {
-                p: [c, c + d * 8.0, c + d * 8.0 + DVec3::new(r(), r(), r()) * 0.3],
+                p: [
+                    c,
+                    c + d * 8.0,
+                    c + d * 8.0 + DVec3::new(r(), r(), r()) * 0.3,
+                ],
                 uv: [[0.0; 2]; 3],
                 flip: false,
                 shading: NO_SHADING,
@@ -334,7 +338,11 @@ mod tests {
             }));
         }
         let bvh = Bvh::new(prims.clone());
-        assert!(bvh.leaf.len() > prims.len() + 100, "{} references", bvh.leaf.len());
+        assert!(
+            bvh.leaf.len() > prims.len() + 100,
+            "{} references",
+            bvh.leaf.len()
+        );
         for _ in 0..4000 {
             let o = DVec3::new(r(), r(), r()) * 12.0 - DVec3::splat(1.0);
             let d = (DVec3::new(r(), r(), r()) - DVec3::splat(0.5)).normalize();

@@ -236,19 +236,39 @@ const EMPTY: Lobe = Lobe {
     weight: Weight::Constant(0.0),
 };
 
-/// The lobes of a BSDF.
+/// Lobes kept inline in a [`Lobes`] (matte, plastic, metal, glass and substrate have one or two,
+/// uber up to four); a mix that flattens to more moves them to the heap. Inline storage keeps a
+/// BSDF, and with it a path vertex, small to copy (four lobes rather than [`MAX_LOBES`]).
+const INLINE_LOBES: usize = 4;
+
+/// Where the lobes of a [`Lobes`] live.
 #[derive(Clone, Debug, PartialEq)]
+enum Storage {
+    Inline([Lobe; INLINE_LOBES]),
+    Spilled(Box<[Lobe; MAX_LOBES]>),
+}
+
+/// The lobes of a BSDF.
+#[derive(Clone, Debug)]
 pub struct Lobes {
-    items: [Lobe; MAX_LOBES],
+    items: Storage,
     len: usize,
     group_prob: [f64; MAX_LOBES],
     groups: usize,
 }
 
+/// Equal lobes and groups (storage beyond them is ignored).
+impl PartialEq for Lobes {
+    fn eq(&self, other: &Self) -> bool {
+        self.as_slice() == other.as_slice()
+            && self.group_prob[..self.groups] == other.group_prob[..other.groups]
+    }
+}
+
 impl Default for Lobes {
     fn default() -> Self {
         Self {
-            items: [EMPTY; MAX_LOBES],
+            items: Storage::Inline([EMPTY; INLINE_LOBES]),
             len: 0,
             group_prob: [0.0; MAX_LOBES],
             groups: 0,
@@ -262,7 +282,17 @@ pub type Probabilities = [f64; MAX_LOBES];
 impl Lobes {
     /// The lobes.
     pub fn as_slice(&self) -> &[Lobe] {
-        &self.items[..self.len]
+        match &self.items {
+            Storage::Inline(a) => &a[..self.len],
+            Storage::Spilled(b) => &b[..self.len],
+        }
+    }
+
+    /// Remove every lobe and group (keeping the storage).
+    pub fn clear(&mut self) {
+        self.len = 0;
+        self.groups = 0;
+        self.group_prob = [0.0; MAX_LOBES];
     }
 
     /// Open a new group of probability `prob`; `None` when full.
@@ -277,8 +307,20 @@ impl Lobes {
 
     /// Add a lobe; `None` when the list is full.
     pub fn push(&mut self, lobe: Lobe) -> Option<()> {
-        let slot = self.items.get_mut(self.len)?;
-        *slot = lobe;
+        if self.len == MAX_LOBES {
+            return None;
+        }
+        if let Storage::Inline(a) = &self.items
+            && self.len == INLINE_LOBES
+        {
+            let mut b = Box::new([EMPTY; MAX_LOBES]);
+            b[..INLINE_LOBES].copy_from_slice(a);
+            self.items = Storage::Spilled(b);
+        }
+        match &mut self.items {
+            Storage::Inline(a) => a[self.len] = lobe,
+            Storage::Spilled(b) => b[self.len] = lobe,
+        }
         self.len += 1;
         Some(())
     }
@@ -363,7 +405,7 @@ impl Lobes {
         u: [f64; 2],
         mode: TransportMode,
     ) -> Option<LobeSample> {
-        self.items[j].kind.sample(wo, u_sub, u, mode)
+        self.as_slice()[j].kind.sample(wo, u_sub, u, mode)
     }
 
     /// `Σ_j scale_j f_j(wo, wi)` over non-delta lobes.
@@ -410,6 +452,36 @@ impl Lobes {
 
     /// Lobe `j`'s inverse: `(u_sub, u0, u1)`.
     pub fn invert(&self, j: usize, wo: DVec3, wi: DVec3, rng: &mut ChainRng) -> Option<[f64; 3]> {
-        self.items[j].kind.invert(wo, wi, rng)
+        self.as_slice()[j].kind.invert(wo, wi, rng)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Lobes beyond the inline four move to the heap in order, up to [`MAX_LOBES`].
+    #[test]
+    fn lobes_spill_past_the_inline_capacity_in_order() {
+        let mut lobes = Lobes::default();
+        let lobe = |k: usize| Lobe {
+            kind: LobeKind::Lambert(Lambert {
+                r: Rgb::splat(k as f64 / 10.0),
+            }),
+            scale: Rgb::WHITE,
+            group: 0,
+            weight: Weight::Constant(1.0),
+        };
+        for k in 0..MAX_LOBES {
+            assert_eq!(lobes.push(lobe(k)), Some(()));
+            assert_eq!(lobes.as_slice().len(), k + 1);
+        }
+        assert_eq!(lobes.push(lobe(99)), None);
+        assert!(matches!(lobes.items, Storage::Spilled(_)));
+        for (k, l) in lobes.as_slice().iter().enumerate() {
+            assert_eq!(*l, lobe(k));
+        }
+        let copy = lobes.clone();
+        assert_eq!(copy.as_slice(), lobes.as_slice());
     }
 }

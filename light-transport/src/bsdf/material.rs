@@ -62,29 +62,31 @@ fn index(material: usize, eta: f64) -> Result<f64> {
     }
 }
 
-/// Collects lobes while walking the material tree.
-pub struct Builder<'a> {
+/// Collects lobes while walking the material tree, into a list it borrows (so a BSDF is built in
+/// place, without copying its lobes around).
+pub struct Builder<'a, 'l> {
     materials: &'a [MaterialDesc],
     textures: &'a [TextureDesc],
     uv: [f64; 2],
     /// The lobes so far.
-    pub lobes: Lobes,
+    pub lobes: &'l mut Lobes,
     root: usize,
 }
 
-impl<'a> Builder<'a> {
-    /// A builder for material `root` at `uv`.
+impl<'a, 'l> Builder<'a, 'l> {
+    /// A builder for material `root` at `uv` appending to `lobes`.
     pub fn new(
         materials: &'a [MaterialDesc],
         textures: &'a [TextureDesc],
         root: usize,
         uv: [f64; 2],
+        lobes: &'l mut Lobes,
     ) -> Self {
         Self {
             materials,
             textures,
             uv,
-            lobes: Lobes::default(),
+            lobes,
             root,
         }
     }

@@ -175,15 +175,38 @@ impl Bsdf {
         uv: [f64; 2],
         frame: Frame,
     ) -> crate::Result<Bsdf> {
-        let mut b = material::Builder::new(materials, textures, material, uv);
-        b.add(material, Rgb::WHITE, 1.0, 0)?;
-        let mut lobes = b.lobes;
-        lobes.finish();
-        Ok(Bsdf {
+        let mut bsdf = Bsdf::empty(frame);
+        bsdf.rebuild(materials, textures, material, uv, frame)?;
+        Ok(bsdf)
+    }
+
+    /// A BSDF without lobes (black) in `frame`.
+    pub fn empty(frame: Frame) -> Bsdf {
+        Bsdf {
             ng: frame.n,
             frame,
-            lobes,
-        })
+            lobes: Lobes::default(),
+        }
+    }
+
+    /// [`Bsdf::from_material`] in place: this BSDF becomes that of `materials[material]` at `uv`
+    /// with local frame `frame` (geometric normal `frame.n`), reusing its storage. On error its
+    /// lobes are unspecified.
+    pub fn rebuild(
+        &mut self,
+        materials: &[MaterialDesc],
+        textures: &[TextureDesc],
+        material: usize,
+        uv: [f64; 2],
+        frame: Frame,
+    ) -> crate::Result<()> {
+        self.frame = frame;
+        self.ng = frame.n;
+        self.lobes.clear();
+        let mut b = material::Builder::new(materials, textures, material, uv, &mut self.lobes);
+        b.add(material, Rgb::WHITE, 1.0, 0)?;
+        self.lobes.finish();
+        Ok(())
     }
 
     /// The same BSDF on a surface whose geometric normal is `ng` (the frame's normal being the

@@ -172,21 +172,21 @@ fn random_walk<S: SampleStream>(
         let Some(hit) = scene.intersect(&ray) else {
             break;
         };
-        let bsdf = scene.bsdf(&hit.point).ok();
-        let mut v = Vertex {
+        let prev = path.len() - 1;
+        path.push(Vertex {
             kind: VertexKind::Surface,
             point: hit.point,
             wo: -ray.d,
-            bsdf,
+            bsdf: None,
             beta,
             delta: false,
             pdf_fwd: 0.0,
             pdf_rev: 0.0,
-        };
-        let prev = path.len() - 1;
-        v.pdf_fwd = path[prev].to_area(pdf_dir, &v, scene);
-        path.push(v);
+        });
         let b = path.len() - 1;
+        // The BSDF is built in place (a vertex is large to copy).
+        scene.bsdf_into(&hit.point, &mut path[b].bsdf);
+        path[b].pdf_fwd = path[prev].to_area(pdf_dir, &path[b], scene);
         if path.len() >= max_vertices {
             break;
         }

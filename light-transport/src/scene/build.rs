@@ -301,6 +301,18 @@ impl Scene {
         )
     }
 
+    /// [`Scene::bsdf`] in place, reusing the storage of the BSDF `out` holds: afterwards `out`
+    /// is the BSDF at `point`, or `None` where [`Scene::bsdf`] fails.
+    pub fn bsdf_into(&self, point: &SurfacePoint, out: &mut Option<Bsdf>) {
+        let m = self.primitive_material[point.primitive as usize] as usize;
+        let frame = Frame::from_normal_tangent(point.ns, point.tangent);
+        let b = out.get_or_insert_with(|| Bsdf::empty(frame));
+        match b.rebuild(&self.materials, &self.textures, m, point.uv, frame) {
+            Ok(()) => b.ng = point.n,
+            Err(_) => *out = None,
+        }
+    }
+
     /// The light at a primitive, if it is emissive.
     pub fn light_at(&self, primitive: u32) -> Option<(usize, &LightKind)> {
         let l = *self.primitive_light.get(primitive as usize)?;

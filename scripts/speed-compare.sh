@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# Throughput and peak memory of this checkout's build against an older revision, side by side on
+# one machine, runs alternating (the only kind of speed claim this project makes: absolute times
+# drift by ±15% on shared machines). Each run renders a fixed amount of work (same seed, same
+# samples or mutations per pixel), so the ratio of render times is the ratio of throughputs.
+#
+#   scripts/speed-compare.sh REV [SCENES] [ALGOS] [ROUNDS]
+#   scripts/speed-compare.sh e7dad17
+#   scripts/speed-compare.sh e7dad17 "cornell door" "bdpt mmlt" 5
+#
+# Defaults: SCENES = veach-bidir (../shared/scenes) and the built-ins cornell caustic door ring
+# pool; ALGOS = pt bdpt pssmlt mmlt mlt cmlt memlt mept; ROUNDS = 3; RESOLUTION = 512x288;
+# MAX_DEPTH = 7; SPP = 4 (PT: 4× that). REV is built in a git worktree (../charted-REV, or
+# OLD_DIR); NEW_BIN and OLD_BIN name binaries to use instead of building them.
+# Prints, per scene and algorithm, the median render time of each build, the speed-up
+# (old time / new time, > 1 is faster) and the peak resident memory of each build; a final line
+# gives the geometric mean of the speed-ups.
+set -euo pipefail
+rev=$1
+root=$(cd "$(dirname "$0")/.." && pwd)
+scenes=${2:-"$root/../shared/scenes/veach-bidir/scene.pbrt cornell caustic door ring pool"}
+algos=${3:-"pt bdpt pssmlt mmlt mlt cmlt memlt mept"}
+rounds=${4:-3}
+res=${RESOLUTION:-512x288} depth=${MAX_DEPTH:-7} spp=${SPP:-4}
+old=${OLD_DIR:-"$root/../charted-$rev"}
+cd "$root"
+[[ -z ${NEW_BIN:-} ]] && cargo build --release --quiet
+if [[ -z ${OLD_BIN:-} ]]; then
+  if [[ ! -d $old ]]; then git worktree add --detach "$old" "$rev"; fi
+  (cd "$old" && cargo build --release --quiet)
+fi
+new_bin=${NEW_BIN:-"$root/target/release/charted"} old_bin=${OLD_BIN:-"$old/target/release/charted"}
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+
+# One run: prints "render-seconds peak-kilobytes".
+run() {
+  local bin=$1 scene=$2 algo=$3 n=$spp
+  [[ $algo == pt ]] && n=$((4 * spp))
+  /usr/bin/time -f '%M' -o "$out/mem" "$bin" render "$scene" --algo "$algo" --spp "$n" \
+    --resolution "$res" --max-depth "$depth" -o "$out/img.exr" > "$out/log" 2>&1 ||
+    { cat "$out/log" >&2; return 1; }
+  local t
+  t=$(sed -nE 's/^time .*render ([0-9.]+) s.*/\1/p' "$out/log")
+  echo "$t $(cat "$out/mem")"
+}
+
+median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+
+printf '%-12s %-7s %9s %9s %8s %10s %10s\n' scene algo "old s" "new s" speed-up "old MB" "new MB"
+logsum=0 count=0
+for scene in $scenes; do
+  name=$(basename "$(dirname "$scene")")
+  [[ -f $scene ]] || name=$scene
+  for algo in $algos; do
+    : > "$out/old" && : > "$out/new"
+    for _ in $(seq 1 "$rounds"); do
+      run "$old_bin" "$scene" "$algo" >> "$out/old"
+      run "$new_bin" "$scene" "$algo" >> "$out/new"
+    done
+    to=$(cut -d' ' -f1 "$out/old" | median) tn=$(cut -d' ' -f1 "$out/new" | median)
+    mo=$(cut -d' ' -f2 "$out/old" | sort -g | tail -1) mn=$(cut -d' ' -f2 "$out/new" | sort -g | tail -1)
+    ratio=$(awk -v a="$to" -v b="$tn" 'BEGIN { printf "%.3f", a / b }')
+    printf '%-12s %-7s %9.2f %9.2f %7.2f× %10.1f %10.1f\n' "$name" "$algo" "$to" "$tn" "$ratio" \
+      "$(awk -v m="$mo" 'BEGIN { print m / 1024 }')" "$(awk -v m="$mn" 'BEGIN { print m / 1024 }')"
+    logsum=$(awk -v s="$logsum" -v r="$ratio" 'BEGIN { print s + log(r) }')
+    count=$((count + 1))
+  done
+done
+awk -v s="$logsum" -v n="$count" 'BEGIN { printf "geometric mean speed-up over %d runs: %.3f×\n", n, exp(s / n) }'
