@@ -242,6 +242,8 @@ const EMPTY: Lobe = Lobe {
 const INLINE_LOBES: usize = 4;
 
 /// Where the lobes of a [`Lobes`] live.
+// The inline variant is large on purpose: boxing it would allocate per hit.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq)]
 enum Storage {
     Inline([Lobe; INLINE_LOBES]),
