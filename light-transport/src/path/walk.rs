@@ -63,6 +63,8 @@ pub fn camera_subpath<S: SampleStream>(
     if max_vertices == 0 {
         return;
     }
+    // One allocation of the final size (growing a vector of large vertices moves them).
+    path.reserve(max_vertices);
     let cs = camera_ray(scene, stream, pixel);
     path.push(Vertex {
         kind: VertexKind::Camera,
@@ -102,6 +104,8 @@ pub fn light_subpath<S: SampleStream>(
     if max_vertices == 0 {
         return;
     }
+    // One allocation of the final size (growing a vector of large vertices moves them).
+    path.reserve(max_vertices);
     stream.start_stream(LIGHT_STREAM);
     stream.seek(layout::LIGHT_CHOICE);
     let choice = stream.next_1d();
