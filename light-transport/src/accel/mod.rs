@@ -110,9 +110,10 @@ pub struct Bvh {
     /// Shading data of the triangles that have vertex normals ([`Triangle::shading`] indexes
     /// it).
     pub shading: Vec<TriangleShading>,
-    /// The primitive of each reference in the BVH's leaves (a triangle split by [`split`] has
-    /// several).
-    leaf: Vec<u32>,
+    /// When some triangle was split into several references ([`split`]): each reference's
+    /// primitive and its index, in leaf order, so traversal still reads primitives sequentially.
+    /// `None` when every primitive has one reference: `primitives` is then in leaf order itself.
+    split_leaves: Option<(Vec<Primitive>, Vec<u32>)>,
 }
 
 fn to_f32(v: DVec3) -> Vec3A {
@@ -180,12 +181,25 @@ impl Bvh {
             })
             .collect();
         let primitives: Vec<Primitive> = original.iter().map(|&i| input[i as usize]).collect();
+        let split_leaves = (leaf.len() > primitives.len()).then(|| {
+            let copies = leaf.iter().map(|&i| primitives[i as usize]).collect();
+            (copies, leaf)
+        });
         Self {
             bvh,
             primitives,
             original,
             shading,
-            leaf,
+            split_leaves,
+        }
+    }
+
+    /// The primitive of the reference at leaf position `id`, and its index.
+    #[inline]
+    fn reference(&self, id: usize) -> (&Primitive, u32) {
+        match &self.split_leaves {
+            Some((copies, index)) => (&copies[id], index[id]),
+            None => (&self.primitives[id], id as u32),
         }
     }
 
@@ -212,8 +226,8 @@ impl Bvh {
         let mut rh = RayHit::none();
         self.bvh
             .ray_traverse(Self::bvh_ray(o, d, t_max), &mut rh, |_, id| {
-                let index = self.leaf[id];
-                match self.primitives[index as usize].intersect_t(o, d, best_t) {
+                let (primitive, index) = self.reference(id);
+                match primitive.intersect_t(o, d, best_t) {
                     Some(h) => {
                         best_t = h.0;
                         best = Some((h, index));
@@ -238,7 +252,7 @@ impl Bvh {
         !self
             .bvh
             .ray_traverse_miss(Self::bvh_ray(o, d, t_max), |_, id| {
-                if self.primitives[self.leaf[id] as usize].hits(o, d, t_max) {
+                if self.reference(id).0.hits(o, d, t_max) {
                     0.0
                 } else {
                     f32::INFINITY
@@ -338,11 +352,8 @@ mod tests {
             }));
         }
         let bvh = Bvh::new(prims.clone());
-        assert!(
-            bvh.leaf.len() > prims.len() + 100,
-            "{} references",
-            bvh.leaf.len()
-        );
+        let references = bvh.split_leaves.as_ref().map_or(0, |(c, _)| c.len());
+        assert!(references > prims.len() + 100, "{references} references");
         for _ in 0..4000 {
             let o = DVec3::new(r(), r(), r()) * 12.0 - DVec3::splat(1.0);
             let d = (DVec3::new(r(), r(), r()) - DVec3::splat(0.5)).normalize();
