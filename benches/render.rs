@@ -1,6 +1,8 @@
 //! Renderer throughput (criterion): rays/s of closest-hit and occlusion queries on the built-in
-//! scenes and on a generated terrain of 1 058 400 triangles, samples/s of path tracing and BDPT, and
-//! the scaling of a render pass from 1 to 2 threads.
+//! scenes, on `veach-bidir` (when `../shared/scenes` is there) and on a generated terrain of
+//! 1 058 400 triangles — ours, and obvhs's own traversal with its own f32 triangles on the same rays
+//! (`obvhs_closest_hit`, `obvhs_occlusion`; scenes without spheres) — samples/s of path tracing
+//! and BDPT, and the scaling of a render pass from 1 to 2 threads.
 //!
 //! `cargo bench --bench render` (add `-- bvh` etc. to filter).
 
@@ -58,6 +60,34 @@ fn camera_rays(scene: &Scene, n: usize) -> Vec<(DVec3, DVec3)> {
         .collect()
 }
 
+fn vec3(v: DVec3) -> glam::Vec3A {
+    glam::Vec3A::new(v.x as f32, v.y as f32, v.z as f32)
+}
+
+/// obvhs's own CWBVH (same build preset as ours, no split references) over f32 copies of the
+/// triangles; `None` when there are spheres (obvhs alone would see different geometry).
+fn obvhs_alone(
+    primitives: &[Primitive],
+) -> Option<(obvhs::cwbvh::CwBvh, Vec<obvhs::triangle::Triangle>)> {
+    let tris = primitives
+        .iter()
+        .map(|p| match p {
+            Primitive::Triangle(t) => Some(obvhs::triangle::Triangle {
+                v0: vec3(t.p[0]),
+                v1: vec3(t.p[1]),
+                v2: vec3(t.p[2]),
+            }),
+            Primitive::Sphere(_) => None,
+        })
+        .collect::<Option<Vec<_>>>()?;
+    let cw = obvhs::cwbvh::builder::build_cwbvh_from_tris(
+        &tris,
+        obvhs::BvhBuildParams::medium_build(),
+        &mut std::time::Duration::default(),
+    );
+    Some((cw, tris))
+}
+
 fn bvh_benches(c: &mut Criterion) {
     let mut g = c.benchmark_group("bvh");
     const N: usize = 4096;
@@ -66,6 +96,17 @@ fn bvh_benches(c: &mut Criterion) {
         let s = Scene::new(&builtin::builtin(name).unwrap(), None).unwrap();
         let rays = camera_rays(&s, N);
         cases.push((name.to_string(), Bvh::new(s.bvh.primitives.clone()), rays));
+    }
+    let veach = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/scenes/veach-bidir/scene.pbrt");
+    if let Ok(desc) = light_transport::scene::pbrt::load(&veach) {
+        let s = Scene::new(&desc, None).unwrap();
+        let rays = camera_rays(&s, N);
+        cases.push((
+            "veach-bidir".into(),
+            Bvh::new(s.bvh.primitives.clone()),
+            rays,
+        ));
     }
     let t = std::time::Instant::now();
     let tris = terrain(727);
@@ -100,6 +141,44 @@ fn bvh_benches(c: &mut Criterion) {
                     .count()
             })
         });
+        if let Some((cw, tris)) = obvhs_alone(&bvh.primitives) {
+            let f32_rays: Vec<obvhs::ray::Ray> = rays
+                .iter()
+                .map(|(o, d)| obvhs::ray::Ray::new(vec3(*o), vec3(*d), 0.0, f32::INFINITY))
+                .collect();
+            g.bench_with_input(
+                BenchmarkId::new("obvhs_closest_hit", name),
+                &f32_rays,
+                |b, rays| {
+                    b.iter(|| {
+                        rays.iter()
+                            .filter(|r| {
+                                let mut hit = obvhs::ray::RayHit::none();
+                                cw.ray_traverse(**r, &mut hit, |ray, id| {
+                                    tris[cw.primitive_indices[id] as usize].intersect(ray)
+                                })
+                            })
+                            .count()
+                    })
+                },
+            );
+            g.bench_with_input(
+                BenchmarkId::new("obvhs_occlusion", name),
+                &f32_rays,
+                |b, rays| {
+                    b.iter(|| {
+                        rays.iter()
+                            .filter(|r| {
+                                let r = obvhs::ray::Ray::new(r.origin, r.direction, 0.0, 5.0);
+                                !cw.ray_traverse_miss(r, |ray, id| {
+                                    tris[cw.primitive_indices[id] as usize].intersect(ray)
+                                })
+                            })
+                            .count()
+                    })
+                },
+            );
+        }
     }
     g.finish();
 }
