@@ -195,6 +195,7 @@ fn integrator_benches(c: &mut Criterion) {
     let bdpt = Bdpt {
         walk,
         heuristic: MisHeuristic::Power,
+        roulette: None,
     };
     for name in builtin::BUILTIN {
         let s = Scene::new(&builtin::builtin(name).unwrap(), Some((64, 64))).unwrap();
@@ -228,6 +229,7 @@ fn scaling_benches(c: &mut Criterion) {
     let bdpt = Bdpt {
         walk: WalkSettings { max_edges: 9 },
         heuristic: MisHeuristic::Power,
+        roulette: None,
     };
     g.throughput(Throughput::Elements(128 * 128));
     for threads in [1, 2] {

@@ -1,6 +1,6 @@
 //! The unbiased estimators agree: path tracing, light tracing and bidirectional path tracing
-//! converge to the same image on every built-in scene, and a BDPT that forgets a class of
-//! strategies is caught.
+//! converge to the same image on every built-in scene, BDPT with Russian roulette converges to
+//! BDPT without, and a BDPT that forgets a class of strategies is caught.
 //!
 //! Each estimator renders `BATCHES` independent images (different seeds) at a small resolution; the
 //! images are cut into blocks of `BLOCK×BLOCK` pixels and every block's mean (summed over channels)
@@ -21,7 +21,8 @@ use light_transport::integrators::{
     Bdpt, Budget, Estimator, LightTracer, PathTracer, Splat, render,
 };
 use light_transport::path::{
-    MisHeuristic, Vertex, WalkSettings, camera_subpath, connect, light_subpath, mis_weight,
+    MisHeuristic, Roulette, Vertex, WalkSettings, camera_subpath, connect, light_subpath,
+    mis_weight,
 };
 use light_transport::sampler::IndependentStream;
 use light_transport::scene::{Scene, builtin};
@@ -201,6 +202,7 @@ fn estimators() -> (PathTracer, LightTracer, Bdpt) {
         Bdpt {
             walk,
             heuristic: MisHeuristic::Power,
+            roulette: None,
         },
     )
 }
@@ -284,4 +286,27 @@ fn a_bdpt_missing_strategies_is_caught() {
     let (p, _) = agreement(&batches(&s, &pt, 32, 2), &batches(&s, &broken, 16, 4), None);
     println!("broken BDPT vs PT: p = {p:.3e}");
     assert!(p < ALPHA, "the broken BDPT was not caught (p = {p:.2e})");
+}
+
+/// BDPT with Russian roulette from the first surface vertex on (the most aggressive setting)
+/// converges to BDPT without it on every built-in scene: same per-block test, α = 1e-4 after Holm.
+/// The test of the test, run by hand: with the survivors' `1/q` boost removed from the walk,
+/// cornell fails at p = 3.6e-15.
+#[test]
+fn bdpt_with_russian_roulette_agrees_with_bdpt_without() {
+    let (_, _, bdpt) = estimators();
+    let with = Bdpt {
+        roulette: Some(Roulette { from: 1 }),
+        ..bdpt
+    };
+    for (name, spp) in [("cornell", 8), ("caustic", 8), ("door", 12), ("pool", 8)] {
+        let s = scene(name, 36, 30);
+        let (p, n) = agreement(
+            &batches(&s, &bdpt, spp, 5),
+            &batches(&s, &with, spp * 2, 6),
+            None,
+        );
+        println!("{name}: BDPT with roulette vs without p = {p:.3e} over {n} blocks");
+        assert!(p > ALPHA, "{name}: roulette biases BDPT (p = {p:.2e})");
+    }
 }

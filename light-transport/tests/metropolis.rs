@@ -204,6 +204,7 @@ fn pssmlt(importance: ImportanceKind) -> Pssmlt {
                 max_edges: MAX_EDGES,
             },
             heuristic: MisHeuristic::Power,
+            roulette: None,
         },
         kelemen: Kelemen::default(),
         importance,

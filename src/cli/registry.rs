@@ -77,6 +77,9 @@ pub struct Common {
 /// The option groups of the algorithms (each algorithm reads the ones it uses).
 #[derive(Args, Debug, Clone)]
 pub struct AlgoArgs {
+    /// BDPT options (bdpt).
+    #[command(flatten)]
+    pub bdpt: algos::bdpt::BdptArgs,
     /// Metropolis options (pssmlt, mmlt, mlt, cmlt).
     #[command(flatten)]
     pub metropolis: super::metropolis::MetropolisArgs,

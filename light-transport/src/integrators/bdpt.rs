@@ -3,7 +3,8 @@
 
 use super::{Estimator, Splat};
 use crate::path::{
-    MisHeuristic, Vertex, WalkSettings, camera_subpath, connect, light_subpath, mis_weight,
+    MisHeuristic, Roulette, Vertex, WalkSettings, camera_subpath_with, connect, light_subpath_with,
+    mis_weight,
 };
 use crate::sampler::IndependentStream;
 use crate::scene::Scene;
@@ -21,6 +22,8 @@ pub struct Bdpt {
     pub walk: WalkSettings,
     /// MIS heuristic.
     pub heuristic: MisHeuristic,
+    /// Russian roulette in both subpath walks (`None`: every walk runs to the length limit).
+    pub roulette: Option<Roulette>,
 }
 
 impl Bdpt {
@@ -67,14 +70,21 @@ impl Estimator for Bdpt {
     ) -> Rgb {
         SUBPATHS.with(|b| {
             let (cam, light) = &mut *b.borrow_mut();
-            camera_subpath(
+            camera_subpath_with(
                 scene,
                 stream,
                 self.walk.max_camera_vertices(),
                 Some(pixel),
+                self.roulette,
                 cam,
             );
-            light_subpath(scene, stream, self.walk.max_light_vertices(), light);
+            light_subpath_with(
+                scene,
+                stream,
+                self.walk.max_light_vertices(),
+                self.roulette,
+                light,
+            );
             self.evaluate(scene, light, cam, splats)
         })
     }

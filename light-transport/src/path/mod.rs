@@ -11,4 +11,7 @@ mod walk;
 pub use connect::{Connection, GRAZING_COSINE, connect, connect_unoccluded, geometry, unoccluded};
 pub use mis::{MisHeuristic, mis_weight};
 pub use vertex::{Vertex, VertexKind};
-pub use walk::{WalkSettings, camera_ray, camera_subpath, light_subpath};
+pub use walk::{
+    Roulette, WalkSettings, camera_ray, camera_subpath, camera_subpath_with, light_subpath,
+    light_subpath_with,
+};

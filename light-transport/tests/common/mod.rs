@@ -74,6 +74,7 @@ pub fn bdpt_batches(scene: &Scene) -> Vec<Vec<f64>> {
             max_edges: MAX_EDGES,
         },
         heuristic: MisHeuristic::Power,
+        roulette: None,
     };
     (0..16)
         .map(|b| {
