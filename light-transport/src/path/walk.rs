@@ -53,16 +53,17 @@ pub fn camera_ray<S: SampleStream>(
 /// Smallest continuation probability of [`Roulette`].
 pub const ROULETTE_FLOOR: f64 = 0.5;
 
-/// Russian roulette in the subpath walks: at every vertex `b ≥ from` (the lens or light vertex
-/// is 0) the walk continues with probability `q = clamp(max_c β_b[c] / β_1[c], 0.5, 0.95)` — the
-/// subpath's throughput since its first surface vertex, so a light subpath's emitted power does
-/// not enter; the floor bounds the `1/q` boost of a survivor (without it, one of four 20 s renders
-/// of `veach-bidir` had a firefly: RMSE 1.36 instead of 0.072) — decided by the vertex block's roulette number `u < q`, and the later vertices'
-/// throughputs are divided by `q`. The decision is a function of the sample stream, so replaying
-/// a stream replays it. Estimators stay unbiased whatever their MIS weights, as long as those sum
-/// to one over the strategies of a path (the densities in them need not include `q`; pbrt and
-/// Mitsuba do the same). Only BDPT uses it: the technique charts' inverses and the path-space
-/// densities do not model it.
+/// Russian roulette in the subpath walks. At every vertex `b ≥ from` (the lens or light vertex is
+/// 0) the walk continues with probability `q = clamp(max_c β_b[c] / β_1[c], 0.5, 0.95)`, decided
+/// by the vertex block's roulette number `u < q`, and the later vertices' throughputs are divided
+/// by `q`. `β_b / β_1` is the subpath's throughput since its first surface vertex, so a light
+/// subpath's emitted power does not enter. The floor bounds a survivor's `1/q` boost: without it,
+/// one of four 20 s renders of `veach-bidir` had a firefly (RMSE 1.36 instead of 0.072).
+///
+/// The decision is a function of the sample stream, so replaying a stream replays it. Estimators
+/// stay unbiased whatever their MIS weights, as long as those sum to one over the strategies of a
+/// path: the densities in them need not include `q` (pbrt and Mitsuba leave it out too). Only BDPT
+/// uses it: the technique charts' inverses and the path-space densities do not model it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Roulette {
     /// First vertex index at which the walk may stop.
