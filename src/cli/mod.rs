@@ -6,6 +6,7 @@ mod diff;
 mod duration;
 mod info;
 pub mod interrupt;
+mod memory;
 mod metropolis;
 mod options;
 mod pathspace;

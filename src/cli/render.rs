@@ -163,6 +163,9 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
         report.rays as f64 / secs / 1e6
     );
     println!("discarded  {} non-finite samples", report.discarded);
+    if let Some(peak) = super::memory::peak_resident_bytes() {
+        println!("memory     peak {:.1} MB resident", peak as f64 / 1e6);
+    }
     for line in &report.details {
         println!("{line}");
     }

@@ -10,9 +10,10 @@ mod split;
 
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::{CwBvh, builder::build_cwbvh};
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+use obvhs::cwbvh::{CwBvh, bvh2_to_cwbvh::bvh2_to_cwbvh};
+use obvhs::ploc::PlocBuilder;
 use obvhs::ray::{Ray as BvhRay, RayHit};
-use std::time::Duration;
 
 /// A primitive of the scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -24,6 +25,14 @@ pub enum Primitive {
 }
 
 impl Primitive {
+    /// The boxes under which the BVH references the primitive (see [`split`]).
+    pub fn references(&self, out: &mut Vec<(DVec3, DVec3)>) {
+        match self {
+            Primitive::Triangle(t) => split::triangle_boxes(t.p, out),
+            Primitive::Sphere(_) => out.push(self.bounds()),
+        }
+    }
+
     fn bounds(&self) -> (DVec3, DVec3) {
         match self {
             Primitive::Triangle(t) => (
@@ -84,6 +93,47 @@ impl Primitive {
     }
 }
 
+/// obvhs's CWBVH over `aabbs`: PLOC, reinsertion, conversion (obvhs's `build_cwbvh` with the
+/// medium preset), with the boxes dropped before the conversion, whose working memory is the
+/// largest of the build.
+fn build(aabbs: Vec<Aabb>) -> CwBvh {
+    if aabbs.is_empty() {
+        return CwBvh::default();
+    }
+    let params = BvhBuildParams::medium_build();
+    let indices = (0..aabbs.len() as u32).collect();
+    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+        params.ploc_search_distance,
+        &aabbs,
+        indices,
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    drop(aabbs);
+    ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+    bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false)
+}
+
+/// Reorder `items` in place so that `items[k]` becomes the old `items[order[k]]` (`order` a
+/// permutation), following its cycles.
+fn permute<T>(items: &mut [T], order: &[u32]) {
+    let mut done = vec![false; items.len()];
+    for start in 0..items.len() {
+        if done[start] {
+            continue;
+        }
+        // Position `k` takes the item at `order[k]`; walk the cycle by swapping.
+        let mut k = start;
+        done[k] = true;
+        while order[k] as usize != start {
+            let next = order[k] as usize;
+            items.swap(k, next);
+            done[next] = true;
+            k = next;
+        }
+    }
+}
+
 thread_local! {
     static RAYS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
 }
@@ -120,6 +170,41 @@ fn to_f32(v: DVec3) -> Vec3A {
     Vec3A::new(v.x as f32, v.y as f32, v.z as f32)
 }
 
+/// The tree of a BVH before its primitives are stored ([`Bvh::topology`]): which primitive each
+/// leaf reference is, and the order in which [`Bvh::assemble`] wants the primitives.
+///
+/// Building in two phases lets a caller build the tree from bounding boxes alone and create its
+/// primitives afterwards, directly in leaf order, so a large mesh never exists twice in memory
+/// (nor alongside the builder's temporary structures).
+pub struct Topology {
+    bvh: CwBvh,
+    /// `original[i]`: the caller's index of the primitive that goes to position `i`.
+    original: Vec<u32>,
+    /// Each leaf reference's position in the final primitive list.
+    leaf: Vec<u32>,
+}
+
+impl Topology {
+    /// The caller's indices of the primitives, in the order [`Bvh::assemble`] takes them.
+    pub fn original(&self) -> &[u32] {
+        &self.original
+    }
+}
+
+/// The f32 box of the reference box `(lo, hi)`, padded by a relative epsilon so that f32
+/// traversal cannot lose a hit of the f64 primitive inside.
+fn padded(lo: DVec3, hi: DVec3) -> Aabb {
+    let pad = (hi - lo)
+        .max_element()
+        .max(lo.abs().max(hi.abs()).max_element())
+        * 1e-6
+        + 1e-12;
+    Aabb::new(
+        to_f32(lo - DVec3::splat(pad)),
+        to_f32(hi + DVec3::splat(pad)),
+    )
+}
+
 impl Bvh {
     /// Build over flat `primitives` (which are then stored in leaf order; see
     /// [`Bvh::original`]).
@@ -128,46 +213,35 @@ impl Bvh {
     }
 
     /// Build over `primitives` whose triangles refer to `shading` data.
-    pub fn with_shading(input: Vec<Primitive>, shading: Vec<TriangleShading>) -> Self {
+    pub fn with_shading(mut input: Vec<Primitive>, shading: Vec<TriangleShading>) -> Self {
+        let topology = Self::topology(input.len(), |i, out| input[i].references(out));
+        permute(&mut input, &topology.original);
+        Self::assemble(topology, input, shading)
+    }
+
+    /// Phase one of a build: the tree over `count` primitives, whose reference boxes
+    /// `references(i, out)` pushes (unpadded): a triangle's from [`Primitive::references`], one
+    /// box per sphere.
+    pub fn topology(
+        count: usize,
+        mut references: impl FnMut(usize, &mut Vec<(DVec3, DVec3)>),
+    ) -> Topology {
         // Boxes of the references: one per primitive, several for triangles whose box is
         // mostly empty (`split`); `owner[r]` is the primitive of reference `r`.
-        let (mut boxes, mut owner) = (Vec::with_capacity(input.len()), Vec::new());
-        for (i, p) in input.iter().enumerate() {
-            let before = boxes.len();
-            match p {
-                Primitive::Triangle(t) => split::triangle_boxes(t.p, &mut boxes),
-                Primitive::Sphere(_) => boxes.push(p.bounds()),
-            }
-            owner.resize(boxes.len(), i as u32);
-            debug_assert!(boxes.len() > before);
+        let (mut aabbs, mut owner) = (Vec::with_capacity(count), Vec::with_capacity(count));
+        let mut boxes = Vec::new();
+        for i in 0..count {
+            boxes.clear();
+            references(i, &mut boxes);
+            debug_assert!(!boxes.is_empty());
+            aabbs.extend(boxes.iter().map(|&(lo, hi)| padded(lo, hi)));
+            owner.resize(aabbs.len(), i as u32);
         }
-        let aabbs: Vec<Aabb> = boxes
-            .iter()
-            .map(|&(lo, hi)| {
-                let pad = (hi - lo)
-                    .max_element()
-                    .max(lo.abs().max(hi.abs()).max_element())
-                    * 1e-6
-                    + 1e-12;
-                Aabb::new(
-                    to_f32(lo - DVec3::splat(pad)),
-                    to_f32(hi + DVec3::splat(pad)),
-                )
-            })
-            .collect();
-        let bvh = if aabbs.is_empty() {
-            CwBvh::default()
-        } else {
-            build_cwbvh(
-                &aabbs,
-                BvhBuildParams::medium_build(),
-                &mut Duration::default(),
-            )
-        };
+        let bvh = build(aabbs);
         // Primitives are numbered by their first reference in leaf order, so traversal mostly
         // reads them sequentially.
-        let mut canonical = vec![u32::MAX; input.len()];
-        let mut original = Vec::with_capacity(input.len());
+        let mut canonical = vec![u32::MAX; count];
+        let mut original = Vec::with_capacity(count);
         let leaf: Vec<u32> = bvh
             .primitive_indices
             .iter()
@@ -180,7 +254,30 @@ impl Bvh {
                 canonical[i]
             })
             .collect();
-        let primitives: Vec<Primitive> = original.iter().map(|&i| input[i as usize]).collect();
+        Topology {
+            bvh,
+            original,
+            leaf,
+        }
+    }
+
+    /// Phase two: the BVH of `topology` over `primitives`, given in the order of
+    /// [`Topology::original`], whose triangles refer to `shading` data.
+    pub fn assemble(
+        topology: Topology,
+        primitives: Vec<Primitive>,
+        shading: Vec<TriangleShading>,
+    ) -> Self {
+        let Topology {
+            bvh,
+            original,
+            leaf,
+        } = topology;
+        assert_eq!(
+            primitives.len(),
+            original.len(),
+            "one primitive per position of the topology"
+        );
         let split_leaves = (leaf.len() > primitives.len()).then(|| {
             let copies = leaf.iter().map(|&i| primitives[i as usize]).collect();
             (copies, leaf)
@@ -277,6 +374,80 @@ mod tests {
     use super::*;
     use crate::geometry::NO_SHADING;
     use mcmc_core::rng::{stream, uniform};
+
+    /// `permute` applies a permutation in place: `items[k]` becomes the old `items[order[k]]`, for
+    /// random permutations of many cycle structures (and the identity and the empty list).
+    #[test]
+    fn permute_follows_cycles() {
+        let mut rng = stream(5, 0);
+        for n in [0usize, 1, 2, 3, 7, 100] {
+            for _ in 0..20 {
+                let mut order: Vec<u32> = (0..n as u32).collect();
+                for i in (1..n).rev() {
+                    let j = ((uniform(&mut rng) * (i + 1) as f64) as usize).min(i);
+                    order.swap(i, j);
+                }
+                let mut items: Vec<u64> = (0..n as u64).map(|i| i * 10).collect();
+                permute(&mut items, &order);
+                let expected: Vec<u64> = order.iter().map(|&i| i as u64 * 10).collect();
+                assert_eq!(items, expected, "order {order:?}");
+            }
+        }
+    }
+
+    /// The two-phase build (`topology`, then the primitives in its order) gives the same BVH as
+    /// the one-call build: same primitive order, same answers to the same rays.
+    #[test]
+    fn two_phase_build_equals_one_call_build() {
+        let mut rng = stream(6, 0);
+        let mut r = || uniform(&mut rng);
+        let input: Vec<Primitive> = (0..500)
+            .map(|i| {
+                let c = DVec3::new(r(), r(), r()) * 4.0;
+                if i % 10 == 0 {
+                    Primitive::Sphere(Sphere {
+                        center: c,
+                        radius: 0.1 + 0.2 * r(),
+                        flip: false,
+                    })
+                } else {
+                    // Some long slivers, so that split references occur.
+                    let e = if i % 7 == 0 { 3.0 } else { 0.3 };
+                    let mut d = || DVec3::new(r() - 0.5, r() - 0.5, r() - 0.5);
+                    let (a, b) = (d() * e, d() * 0.3);
+                    Primitive::Triangle(Triangle {
+                        p: [c, c + a, c + b],
+                        uv: [[0.0; 2]; 3],
+                        flip: false,
+                        shading: NO_SHADING,
+                    })
+                }
+            })
+            .collect();
+        let one = Bvh::new(input.clone());
+        let topology = Bvh::topology(input.len(), |i, out| input[i].references(out));
+        let ordered = topology
+            .original()
+            .iter()
+            .map(|&i| input[i as usize])
+            .collect();
+        let two = Bvh::assemble(topology, ordered, Vec::new());
+        assert!(
+            one.split_leaves.is_some(),
+            "the test should exercise splits"
+        );
+        assert_eq!(one.original, two.original);
+        assert_eq!(one.primitives, two.primitives);
+        for _ in 0..2000 {
+            let o = DVec3::new(r(), r(), r()) * 6.0 - DVec3::ONE;
+            let d = (DVec3::new(r(), r(), r()) - DVec3::splat(0.5)).normalize();
+            assert_eq!(
+                one.closest_hit(o, d, f64::INFINITY),
+                two.closest_hit(o, d, f64::INFINITY)
+            );
+            assert_eq!(one.occluded(o, d, 2.0), two.occluded(o, d, 2.0));
+        }
+    }
 
     /// A flat quad is hit by rays along its normal whatever the sign of their zero components
     /// (a direction of `(−0.0, −1, −0.0)` used to slip through).

@@ -53,9 +53,11 @@ impl Scene {
         let (w, h) = resolution.unwrap_or((desc.film.width, desc.film.height));
         validate_resolution(w, h)?;
         let camera = Camera::new(cam, w, h)?;
-        let mut prims = Vec::new();
+        // Geometry is built in two phases (`Bvh::topology`, `Bvh::assemble`): the primitives are
+        // first only named, `(mesh, triangle)` or `(SPHERE, sphere)`, and created once the tree
+        // is known, directly in leaf order, so a large mesh never exists twice in memory.
+        let mut prims: Vec<[u32; 2]> = Vec::new();
         let mut prim_mat = Vec::new();
-        let mut shading: Vec<TriangleShading> = Vec::new();
         let mut emissive: Vec<(u32, AreaLightDesc)> = Vec::new();
         let material_index = |m: usize, what: &str| -> Result<u32> {
             let n = desc.materials.len() + 1;
@@ -67,41 +69,20 @@ impl Scene {
                 )))
             }
         };
-        for mesh in &desc.meshes {
+        for (k, mesh) in desc.meshes.iter().enumerate() {
             let m = material_index(mesh.material, "a mesh")?;
             let mut area = 0.0;
             let first = prims.len();
-            for tri in &mesh.indices {
-                let get = |i: u32| {
-                    mesh.positions.get(i as usize).copied().ok_or_else(|| {
-                        Error::InvalidScene(format!(
-                            "triangle index {i} out of range ({} vertices)",
-                            mesh.positions.len()
-                        ))
-                    })
-                };
-                let p = [get(tri[0])?, get(tri[1])?, get(tri[2])?];
-                let uv = match &mesh.uvs {
-                    Some(uvs) => [tri[0], tri[1], tri[2]]
-                        .map(|i| uvs.get(i as usize).copied().unwrap_or([0.0, 0.0])),
-                    None => [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
-                };
-                let mut t = Triangle {
-                    p,
-                    uv,
-                    flip: mesh.flip_normals,
-                    shading: NO_SHADING,
-                };
+            for (j, tri) in mesh.indices.iter().enumerate() {
+                let t = mesh_triangle(mesh, *tri)?;
                 let a = t.area();
                 if !(a > 0.0 && a.is_finite()) {
                     continue; // loaders drop and report degenerate triangles; never trace them
                 }
-                if let Some(sh) = triangle_shading(mesh, *tri, t.normal())? {
-                    t.shading = shading.len() as u32;
-                    shading.push(sh);
-                }
+                // Checked here so that errors come before the build.
+                triangle_shading(mesh, *tri, t.normal())?;
                 area += a;
-                prims.push(Primitive::Triangle(t));
+                prims.push([k as u32, j as u32]);
                 prim_mat.push(m);
             }
             if let Some(al) = mesh.area_light {
@@ -155,6 +136,7 @@ impl Scene {
             });
         }
         let _ = nmat_check(&materials)?;
+        let first_sphere = prims.len() as u32;
         for s in &spheres {
             if !(s.radius > 0.0 && s.radius.is_finite() && s.center.is_finite()) {
                 return Err(Error::InvalidScene(format!(
@@ -166,17 +148,45 @@ impl Scene {
             }
             let m = material_index(s.material, "a sphere")?;
             let i = prims.len() as u32;
-            prims.push(Primitive::Sphere(Sphere {
-                center: s.center,
-                radius: s.radius,
-                flip: s.flip_normals,
-            }));
+            prims.push([SPHERE, i - first_sphere]);
             prim_mat.push(m);
             if let Some(al) = s.area_light {
                 emissive.push((i, al));
             }
         }
-        let bvh = Bvh::with_shading(prims, shading);
+        let primitive = |[k, j]: [u32; 2]| -> Result<Primitive> {
+            Ok(if k == SPHERE {
+                let s = &spheres[j as usize];
+                Primitive::Sphere(Sphere {
+                    center: s.center,
+                    radius: s.radius,
+                    flip: s.flip_normals,
+                })
+            } else {
+                let mesh = &desc.meshes[k as usize];
+                Primitive::Triangle(mesh_triangle(mesh, mesh.indices[j as usize])?)
+            })
+        };
+        let topology = Bvh::topology(prims.len(), |i, out| match primitive(prims[i]) {
+            Ok(p) => p.references(out),
+            Err(_) => unreachable!("every primitive was checked above"),
+        });
+        let mut shading: Vec<TriangleShading> = Vec::new();
+        let mut leaf_order = Vec::with_capacity(prims.len());
+        for &i in topology.original() {
+            let mut p = primitive(prims[i as usize])?;
+            if let Primitive::Triangle(t) = &mut p {
+                let [k, j] = prims[i as usize];
+                let mesh = &desc.meshes[k as usize];
+                if let Some(sh) = triangle_shading(mesh, mesh.indices[j as usize], t.normal())? {
+                    t.shading = shading.len() as u32;
+                    shading.push(sh);
+                }
+            }
+            leaf_order.push(p);
+        }
+        drop(prims);
+        let bvh = Bvh::assemble(topology, leaf_order, shading);
         // The BVH stores primitives in its leaf order: carry the per-primitive tables over.
         let mut new_index = vec![0u32; bvh.original.len()];
         for (new, &old) in bvh.original.iter().enumerate() {
@@ -383,6 +393,34 @@ pub fn validate_resolution(w: usize, h: usize) -> Result<()> {
         });
     }
     Ok(())
+}
+
+/// `Scene::new`'s name of a sphere primitive: `[SPHERE, index]`.
+const SPHERE: u32 = u32::MAX;
+
+/// Triangle `tri` of `mesh`, flat (its shading data comes from [`triangle_shading`]).
+fn mesh_triangle(mesh: &MeshDesc, tri: [u32; 3]) -> Result<Triangle> {
+    let get = |i: u32| {
+        mesh.positions.get(i as usize).copied().ok_or_else(|| {
+            Error::InvalidScene(format!(
+                "triangle index {i} out of range ({} vertices)",
+                mesh.positions.len()
+            ))
+        })
+    };
+    let p = [get(tri[0])?, get(tri[1])?, get(tri[2])?];
+    let uv = match &mesh.uvs {
+        Some(uvs) => {
+            [tri[0], tri[1], tri[2]].map(|i| uvs.get(i as usize).copied().unwrap_or([0.0, 0.0]))
+        }
+        None => [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
+    };
+    Ok(Triangle {
+        p,
+        uv,
+        flip: mesh.flip_normals,
+        shading: NO_SHADING,
+    })
 }
 
 /// The shading data of triangle `tri` of `mesh` (`None` when the mesh has no normals, or they

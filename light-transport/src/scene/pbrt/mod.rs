@@ -47,7 +47,7 @@ pub fn load(path: &Path) -> Result<SceneDescription> {
         path: path.to_path_buf(),
         source,
     })?;
-    let text = String::from_utf8_lossy(&bytes).into_owned();
+    let text = tokenizer::text_of(bytes);
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let key = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     parser::Loader::new(text, path.to_path_buf(), dir, key).run()

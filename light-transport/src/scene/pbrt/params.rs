@@ -180,8 +180,7 @@ pub(crate) fn parse_list(tok: &mut Tokenizer, directive: Location) -> Result<Par
                 ),
             ));
         }
-        let raw = read_value_tokens(tok, &decl, &location)?;
-        let values = convert(ty, &decl.text, &raw, tok)?;
+        let values = read_values(tok, ty, &decl, &location)?;
         params.push(Param {
             ty,
             decl: format!("{ty_name} {name}"),
@@ -194,42 +193,55 @@ pub(crate) fn parse_list(tok: &mut Tokenizer, directive: Location) -> Result<Par
     Ok(ParamList { params, directive })
 }
 
-/// The tokens of one value: a bracketed list or a single token.
-fn read_value_tokens(tok: &mut Tokenizer, decl: &Token, location: &Location) -> Result<Vec<Token>> {
+/// The values of one parameter, a bracketed list or a single token, converted to `ty` as they
+/// are read (a mesh's millions of numbers never exist as tokens all at once).
+fn read_values(
+    tok: &mut Tokenizer,
+    ty: ParamType,
+    decl: &Token,
+    location: &Location,
+) -> Result<Values> {
     let missing = || {
         Error::scene(
             location,
             format!("parameter \"{}\" has no value", decl.text),
         )
     };
+    let mut values = match ty {
+        _ if ty.is_real() => Values::Reals(Vec::new()),
+        ParamType::Integer => Values::Ints(Vec::new()),
+        ParamType::Bool => Values::Bools(Vec::new()),
+        ParamType::Str | ParamType::Texture => Values::Strings(Vec::new()),
+        _ => Values::Unsupported,
+    };
     let first = tok.next_token()?.ok_or_else(missing)?;
     match first.kind {
-        TokenKind::Open => {
-            let mut out = Vec::new();
-            loop {
-                let Some(t) = tok.next_token()? else {
+        TokenKind::Open => loop {
+            let Some(t) = tok.next_token()? else {
+                return Err(Error::scene(
+                    &tok.location(first.line),
+                    format!("`[` of parameter \"{}\" is never closed", decl.text),
+                ));
+            };
+            match t.kind {
+                TokenKind::Close => return Ok(values),
+                TokenKind::Open => {
                     return Err(Error::scene(
-                        &tok.location(first.line),
-                        format!("`[` of parameter \"{}\" is never closed", decl.text),
+                        &tok.location(t.line),
+                        format!("nested `[` in the value of parameter \"{}\"", decl.text),
                     ));
-                };
-                match t.kind {
-                    TokenKind::Close => return Ok(out),
-                    TokenKind::Open => {
-                        return Err(Error::scene(
-                            &tok.location(t.line),
-                            format!("nested `[` in the value of parameter \"{}\"", decl.text),
-                        ));
-                    }
-                    _ => out.push(t),
                 }
+                _ => push_value(&mut values, &decl.text, t, tok)?,
             }
-        }
+        },
         TokenKind::Close => Err(Error::scene(
             &tok.location(first.line),
             format!("unexpected `]` as the value of parameter \"{}\"", decl.text),
         )),
-        _ => Ok(vec![first]),
+        _ => {
+            push_value(&mut values, &decl.text, first, tok)?;
+            Ok(values)
+        }
     }
 }
 
@@ -239,7 +251,8 @@ pub(crate) fn parse_real(text: &str) -> Option<f64> {
     v.is_finite().then_some(v)
 }
 
-fn convert(ty: ParamType, decl: &str, raw: &[Token], tok: &Tokenizer) -> Result<Values> {
+/// Convert one value token to the kind of `values`.
+fn push_value(values: &mut Values, decl: &str, t: Token, tok: &Tokenizer) -> Result<()> {
     let bad = |t: &Token, what: &str| {
         Error::scene(
             &tok.location(t.line),
@@ -249,52 +262,33 @@ fn convert(ty: ParamType, decl: &str, raw: &[Token], tok: &Tokenizer) -> Result<
             ),
         )
     };
-    Ok(match ty {
-        _ if ty.is_real() => {
-            let mut v = Vec::with_capacity(raw.len());
-            for t in raw {
-                let x = (t.kind == TokenKind::Bare)
-                    .then(|| parse_real(&t.text))
-                    .flatten()
-                    .ok_or_else(|| bad(t, "a finite number"))?;
-                v.push(x);
+    match values {
+        Values::Reals(v) => v.push(
+            (t.kind == TokenKind::Bare)
+                .then(|| parse_real(&t.text))
+                .flatten()
+                .ok_or_else(|| bad(&t, "a finite number"))?,
+        ),
+        Values::Ints(v) => v.push(
+            (t.kind == TokenKind::Bare)
+                .then(|| t.text.parse::<i64>().ok())
+                .flatten()
+                .ok_or_else(|| bad(&t, "an integer"))?,
+        ),
+        Values::Bools(v) => v.push(match t.text.as_str() {
+            "true" => true,
+            "false" => false,
+            _ => return Err(bad(&t, "\"true\" or \"false\"")),
+        }),
+        Values::Strings(v) => {
+            if t.kind != TokenKind::Str {
+                return Err(bad(&t, "a quoted string"));
             }
-            Values::Reals(v)
+            v.push(t.text);
         }
-        ParamType::Integer => {
-            let mut v = Vec::with_capacity(raw.len());
-            for t in raw {
-                let x = (t.kind == TokenKind::Bare)
-                    .then(|| t.text.parse::<i64>().ok())
-                    .flatten()
-                    .ok_or_else(|| bad(t, "an integer"))?;
-                v.push(x);
-            }
-            Values::Ints(v)
-        }
-        ParamType::Bool => {
-            let mut v = Vec::with_capacity(raw.len());
-            for t in raw {
-                v.push(match t.text.as_str() {
-                    "true" => true,
-                    "false" => false,
-                    _ => return Err(bad(t, "\"true\" or \"false\"")),
-                });
-            }
-            Values::Bools(v)
-        }
-        ParamType::Str | ParamType::Texture => {
-            let mut v = Vec::with_capacity(raw.len());
-            for t in raw {
-                if t.kind != TokenKind::Str {
-                    return Err(bad(t, "a quoted string"));
-                }
-                v.push(t.text.clone());
-            }
-            Values::Strings(v)
-        }
-        _ => Values::Unsupported,
-    })
+        Values::Unsupported => {}
+    }
+    Ok(())
 }
 
 /// Linear sRGB (Rec. 709 primaries, D65) from CIE XYZ.

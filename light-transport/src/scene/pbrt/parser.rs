@@ -639,7 +639,7 @@ impl Loader {
             ));
         }
         let bytes = std::fs::read(&path).map_err(|e| fail(&e))?;
-        let text = String::from_utf8_lossy(&bytes).into_owned();
+        let text = super::tokenizer::text_of(bytes);
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         self.files.push(Frame {
             tok: Tokenizer::new(text, path),

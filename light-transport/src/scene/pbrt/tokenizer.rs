@@ -5,6 +5,11 @@
 use crate::error::{Error, Location, Result};
 use std::path::{Path, PathBuf};
 
+/// The text of a file's bytes; invalid UTF-8 becomes U+FFFD (copied only then).
+pub(crate) fn text_of(bytes: Vec<u8>) -> String {
+    String::from_utf8(bytes).unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned())
+}
+
 /// What a token is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum TokenKind {
@@ -228,6 +233,12 @@ mod tests {
                 (Close, "]".into(), 4),
             ]
         );
+    }
+
+    #[test]
+    fn file_bytes_become_text_with_invalid_utf8_replaced() {
+        assert_eq!(text_of(b"Shape \"sphere\"".to_vec()), "Shape \"sphere\"");
+        assert_eq!(text_of(b"# caf\xe9\nWorldBegin".to_vec()), "# caf\u{fffd}\nWorldBegin");
     }
 
     #[test]
