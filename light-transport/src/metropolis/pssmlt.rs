@@ -2,13 +2,18 @@
 //! lazy primary sample (camera, light and technique streams), the target is the scalar importance
 //! of the sum of MIS-weighted contributions of *all* strategies connecting the two subpaths it
 //! generates, and the moves are Kelemen's small and large steps.
+//!
+//! With the BDPT's Russian roulette ([`crate::path::Roulette`]) the walks stop early where the
+//! roulette numbers of the primary sample say so and the survivors carry `1/q`: the target is then
+//! another function of the primary sample with the same integral, and a state still replays
+//! exactly, since the decisions are read from its numbers.
 
 use super::driver::Method;
 use super::importance::ImportanceKind;
 use super::record::{Contribution, Recordable};
 use super::stream::PrimaryStream;
 use crate::integrators::Bdpt;
-use crate::path::{Vertex, camera_subpath, light_subpath};
+use crate::path::{Vertex, camera_subpath_with, light_subpath_with};
 use crate::sampler::{CAMERA_STREAM, STREAMS, layout};
 use crate::scene::Scene;
 use mcmc_core::kernel::Observer;
@@ -67,17 +72,19 @@ impl Pssmlt {
         SUBPATHS.with(|b| {
             let (cam, light) = &mut *b.borrow_mut();
             let mut stream = PrimaryStream::new(&mut state.sample);
-            camera_subpath(
+            camera_subpath_with(
                 scene,
                 &mut stream,
                 self.bdpt.walk.max_camera_vertices(),
                 None,
+                self.bdpt.roulette,
                 cam,
             );
-            light_subpath(
+            light_subpath_with(
                 scene,
                 &mut stream,
                 self.bdpt.walk.max_light_vertices(),
+                self.bdpt.roulette,
                 light,
             );
             let own = self

@@ -62,8 +62,11 @@ pub const ROULETTE_FLOOR: f64 = 0.5;
 ///
 /// The decision is a function of the sample stream, so replaying a stream replays it. Estimators
 /// stay unbiased whatever their MIS weights, as long as those sum to one over the strategies of a
-/// path: the densities in them need not include `q` (pbrt and Mitsuba leave it out too). Only BDPT
-/// uses it: the technique charts' inverses and the path-space densities do not model it.
+/// path: the densities in them need not include `q` (pbrt and Mitsuba leave it out too). BDPT and
+/// PSSMLT (whose target is BDPT's estimate as a function of the primary sample) use it; MMLT does
+/// not (its technique fixes both subpaths' lengths, so a stop would only lose the sample), nor do
+/// the path-space methods: the technique charts' inverses and the path-space densities do not
+/// model it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Roulette {
     /// First vertex index at which the walk may stop.

@@ -9,8 +9,8 @@ use light_transport::renderer::Passes;
 /// Options of bidirectional path tracing (bdpt).
 #[derive(Args, Debug, Clone)]
 pub struct BdptArgs {
-    /// BDPT: Russian roulette in both subpath walks from this vertex on (1 = the first surface
-    /// vertex; 0 = off, every walk runs to --max-depth).
+    /// BDPT and PSSMLT: Russian roulette in both subpath walks from this vertex on (1 = the
+    /// first surface vertex; 0 = off, every walk runs to --max-depth).
     #[arg(long, default_value_t = 0)]
     pub roulette: usize,
 }
@@ -22,12 +22,15 @@ pub const ENTRY: Entry = Entry {
     unbiased: true,
     build: |_, c, a| {
         let mut b = bdpt(c);
-        b.roulette = (a.bdpt.roulette > 0).then_some(Roulette {
-            from: a.bdpt.roulette,
-        });
+        b.roulette = roulette(&a.bdpt);
         Ok(Box::new(Passes::new(b)))
     },
 };
+
+/// The roulette of `--roulette` (`None` for 0).
+pub fn roulette(a: &BdptArgs) -> Option<Roulette> {
+    (a.roulette > 0).then_some(Roulette { from: a.roulette })
+}
 
 /// BDPT with the common options (also the evaluator of PSSMLT), without roulette.
 pub fn bdpt(c: &Common) -> Bdpt {

@@ -11,9 +11,11 @@ pub const ENTRY: Entry = Entry {
     unbiased: false,
     build: |_, c, a| {
         let m = &a.metropolis;
+        let mut bdpt = super::bdpt::bdpt(c);
+        bdpt.roulette = super::bdpt::roulette(&a.bdpt);
         Ok(Box::new(Metropolis {
             method: Pssmlt {
-                bdpt: super::bdpt::bdpt(c),
+                bdpt,
                 kelemen: m.kelemen()?,
                 importance: m.importance(),
             },

@@ -238,7 +238,10 @@ mod tests {
     #[test]
     fn file_bytes_become_text_with_invalid_utf8_replaced() {
         assert_eq!(text_of(b"Shape \"sphere\"".to_vec()), "Shape \"sphere\"");
-        assert_eq!(text_of(b"# caf\xe9\nWorldBegin".to_vec()), "# caf\u{fffd}\nWorldBegin");
+        assert_eq!(
+            text_of(b"# caf\xe9\nWorldBegin".to_vec()),
+            "# caf\u{fffd}\nWorldBegin"
+        );
     }
 
     #[test]
