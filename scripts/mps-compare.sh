@@ -15,10 +15,11 @@ cargo build --release --quiet
 bin=target/release/charted
 spp=4
 
-# scene, pm photon paths per map, mps mutations per pixel
+# scene, pm photon paths per map, mps mutations per pixel (set for about equal total time on a
+# 2-core machine in November 2026, with the maximum radii from the maps' density)
 runs=(
-  "rooms 400000 20"
-  "lantern 400000 40"
+  "rooms 1000000 20"
+  "lantern 2000000 40"
   "box 200000 64"
 )
 

@@ -154,7 +154,10 @@ fn every_subcommand_runs_on_a_tiny_image() {
         "-o",
         &o("pm.exr"),
     ]));
-    assert!(ok && out.contains("bytes per photon"), "{out}{e}");
+    assert!(
+        ok && out.contains("bytes per photon") && out.contains("d_max global"),
+        "{out}{e}"
+    );
     let (ok, _, e) = run(charted().args([
         "render",
         "cornell",
@@ -170,6 +173,23 @@ fn every_subcommand_runs_on_a_tiny_image() {
         &o("pm-bad.exr"),
     ]));
     assert!(!ok && e.contains("k ≥ 2"), "{e}");
+    for (flag, value) in [("--radius-alpha", "0"), ("--global-radius", "NaN")] {
+        let (ok, _, e) = run(charted().args([
+            "render",
+            "cornell",
+            "--algo",
+            "pm",
+            "--spp",
+            "1",
+            "--resolution",
+            "8x8",
+            flag,
+            value,
+            "-o",
+            &o("pm-bad.exr"),
+        ]));
+        assert!(!ok && e.contains("α in (0, 1]"), "{flag} {value}: {e}");
+    }
     // Metropolis photon sampling with the shipped user paths of `box`; a bad user-path file is an
     // error naming its line.
     let (ok, out, e) = run(charted().args([

@@ -11,7 +11,7 @@
 //! seeds: the verdicts are reproducible.
 
 use light_transport::math::DVec3;
-use light_transport::photon::{Lookup, Photon, PhotonMap};
+use light_transport::photon::{Lookup, MaxRadius, Photon, PhotonMap};
 use light_transport::spectrum::Rgb;
 use mcmc_core::rng::{stream, uniform};
 use std::f64::consts::PI;
@@ -131,4 +131,111 @@ fn many_photons_at_one_position() {
         n: DVec3::Y,
     }];
     assert!(PhotonMap::new(bad).is_err());
+}
+
+/// The density rule for the largest lookup radius (`photon::radius`): on the plane of density
+/// `ρ` it gives `d_max = √(k / (π α ρ))` (the typical density is the median of `m_k/(π r_k²)` over
+/// sampled photons, which is `ρ` there, less a small shortfall from photons near the square's
+/// edges). Four independent maps, each within 1.5% (the median's own spread is about 0.3%).
+/// Applying `α` inside the square root instead would be off by a factor 10: caught. The cap
+/// binds when the rule asks for more, and stands in for a map of `k` photons.
+#[test]
+fn the_density_radius_matches_the_planes_density() {
+    let rho = PHOTONS as f64 / 4.0;
+    let (k, alpha) = (60, 0.1);
+    let expected = (k as f64 / (PI * alpha * rho)).sqrt();
+    for m in 0..4 {
+        let map = PhotonMap::new(photons(700 + m, PHOTONS, DVec3::Y, POWER)).expect("map");
+        let r = MaxRadius::Density { alpha }.resolve(&map, k, 10.0, 0.05);
+        let density = r.density.expect("a density");
+        println!(
+            "map {m}: d_max {:.6} for {expected:.6} (ratio {:.4}); typical density {density:.1} for {rho}",
+            r.radius,
+            r.radius / expected
+        );
+        assert!(
+            (r.radius / expected - 1.0).abs() < 0.015,
+            "d_max {} against {expected}",
+            r.radius
+        );
+        let wrong = (k as f64 * alpha / (PI * density)).sqrt();
+        assert!((wrong / expected - 1.0).abs() > 0.015);
+        assert!(!r.capped);
+        // In a scene of radius 1 the cap of 5% (0.05 < 0.0618) binds.
+        let capped = MaxRadius::Density { alpha }.resolve(&map, k, 1.0, 0.05);
+        assert!(capped.capped && capped.radius == 0.05);
+    }
+    // Where the map holds only k photons or fewer there is no density: the cap.
+    let few = PhotonMap::new(photons(9, k, DVec3::Y, POWER)).expect("map");
+    let r = MaxRadius::Density { alpha }.resolve(&few, k, 10.0, 0.05);
+    assert_eq!((r.radius, r.density), (0.5, None));
+    // A fixed fraction is a fraction of the scene's radius.
+    let r = MaxRadius::Fraction(0.02).resolve(&few, k, 10.0, 0.05);
+    assert_eq!(r.radius, 0.2);
+    assert!(!MaxRadius::Density { alpha: 0.0 }.is_valid());
+    assert!(!MaxRadius::Density { alpha: f64::NAN }.is_valid());
+    assert!(!MaxRadius::Fraction(f64::INFINITY).is_valid());
+}
+
+/// With the density rule, estimates where the map is sparser than `α` times its typical density
+/// stop at `d_max` (fewer than `k` photons, no blurring from far away) and stay unbiased there;
+/// denser regions reach their `k` photons within it. Half of the square holds 20× the photons
+/// of the other half: the sparse half's density is 0.05 of the dense half's, below α = 0.1.
+#[test]
+fn the_density_radius_limits_estimates_only_where_the_map_is_sparse() {
+    let (k, alpha) = (60, 0.1);
+    let mut rng = stream(11, 0);
+    let (dense, sparse) = (190_000usize, 9_500usize);
+    let mut v = Vec::with_capacity(dense + sparse);
+    for (count, x0) in [(dense, 0.0), (sparse, 1.0)] {
+        v.extend((0..count).map(|_| Photon {
+            p: DVec3::new(x0 + uniform(&mut rng), 0.0, 2.0 * uniform(&mut rng)),
+            wi: DVec3::Y,
+            power: Rgb::splat(POWER),
+            n: DVec3::Y,
+        }));
+    }
+    let map = PhotonMap::new(v).expect("map");
+    let r = MaxRadius::Density { alpha }.resolve(&map, k, 10.0, 0.05);
+    let rho_dense = dense as f64 / 2.0;
+    println!(
+        "d_max {:.5}; typical density {:.0} (dense half {rho_dense})",
+        r.radius,
+        r.density.unwrap_or(0.0)
+    );
+    let reach = |x: DVec3| {
+        (1..=k)
+            .take_while(|&i| {
+                map.kth_nearest_distance2(x, i)
+                    .is_some_and(|d2| d2 <= r.radius * r.radius)
+            })
+            .count()
+    };
+    let in_dense = reach(DVec3::new(0.5, 0.0, 1.0));
+    let in_sparse = reach(DVec3::new(1.5, 0.0, 1.0));
+    println!("photons within d_max: dense half {in_dense}, sparse half {in_sparse}");
+    assert_eq!(in_dense, k);
+    // Expected k ρ_sparse / (α ρ̃) = 30 in the sparse half.
+    assert!(in_sparse < k, "{in_sparse} photons in reach");
+    // The estimate there is the radius-limited one, unbiased for the sparse density.
+    let lookup = Lookup::new(k, r.radius);
+    let f = |_: DVec3| Rgb::splat(ALBEDO / PI);
+    let mut sum = 0.0;
+    let mut n = 0;
+    for i in 0..10 {
+        for j in 0..20 {
+            let x = DVec3::new(
+                1.05 + 0.1 * i as f64 * 0.9,
+                0.0,
+                0.05 + 0.1 * j as f64 * 0.95,
+            );
+            sum += map.estimate(x, DVec3::Y, &lookup, f).0[1];
+            n += 1;
+        }
+    }
+    let exact = ALBEDO / PI * (sparse as f64 / 2.0) * POWER;
+    let ratio = sum / n as f64 / exact;
+    println!("sparse half: mean estimate over exact {ratio:.4}");
+    // 200 estimates of ~30 photons each (relative sd ≈ 0.2 each, partly overlapping): ±10%.
+    assert!((ratio - 1.0).abs() < 0.1, "sparse estimate ratio {ratio}");
 }

@@ -138,6 +138,23 @@ impl PhotonMap {
         std::mem::size_of::<Photon>() + std::mem::size_of::<[f64; 3]>() + std::mem::size_of::<u32>()
     }
 
+    /// The squared distance from `x` to its `k`-th nearest photon (counting a photon at `x`), or
+    /// `None` when the map holds fewer than `k` photons.
+    pub fn kth_nearest_distance2(&self, x: DVec3, k: usize) -> Option<f64> {
+        let k = NonZero::new(k)?;
+        if self.photons.len() < k.get() {
+            return None;
+        }
+        let found = self
+            .tree
+            .query(&x.to_array())
+            .nearest_n::<SquaredEuclidean<f64>>(k)
+            .execute();
+        (found.len() == k.get())
+            .then(|| found.last().map(|q| q.distance))
+            .flatten()
+    }
+
     /// The cone-filtered estimate at `x` (normal `n`): `Σ f(ω_p) Φ_p w(d_p/r) / (π r²/3)`, with
     /// `f` the BSDF value for light arriving from `ω_p` (a function of the photon's `wi`).
     pub fn estimate(

@@ -18,6 +18,7 @@
 //! unbiased: it approaches the converged image as the photon counts grow.
 
 use super::map::{Lookup, PhotonMap, PhotonMapError};
+use super::radius::{MaxRadius, Resolved};
 use super::trace::trace_photons;
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, offset_origin};
@@ -40,11 +41,11 @@ pub struct PhotonMapping {
     pub gather_rays: usize,
     /// Photons per estimate (`n = 60`, Fan et al. §6).
     pub k: usize,
-    /// Largest lookup radius of the global map, as a fraction of the scene's bounding-sphere
-    /// radius (0.05, Mitsuba 0.6's default).
-    pub global_radius: f64,
-    /// Largest lookup radius of the caustic map, same units (0.0125).
-    pub caustic_radius: f64,
+    /// Largest lookup radius of the global map: by default from the map's photon density with
+    /// `α = 0.1` (Fan et al. §6; [`super::radius`]).
+    pub global_radius: MaxRadius,
+    /// Largest lookup radius of the caustic map (same default).
+    pub caustic_radius: MaxRadius,
     /// Maximum number of edges of a path (camera and photon paths).
     pub max_edges: usize,
     /// Seed of the photon tracing.
@@ -59,8 +60,8 @@ impl PhotonMapping {
             caustic_paths: 200_000,
             gather_rays: 16,
             k: 60,
-            global_radius: 0.05,
-            caustic_radius: 0.0125,
+            global_radius: MaxRadius::DEFAULT,
+            caustic_radius: MaxRadius::DEFAULT,
             max_edges,
             seed: 0x9407_0A11,
         }
@@ -119,11 +120,11 @@ impl PhotonMapper {
         if s.gather_rays == 0
             || s.k < 2
             || s.max_edges < 1
-            || !(s.global_radius > 0.0 && s.global_radius.is_finite())
-            || !(s.caustic_radius > 0.0 && s.caustic_radius.is_finite())
+            || !s.global_radius.is_valid()
+            || !s.caustic_radius.is_valid()
         {
             return Err(PhotonMappingError::Settings(format!(
-                "need ≥ 1 gather ray, k ≥ 2, max depth ≥ 1 and positive finite radii; got {} gather rays, k = {}, radii {} and {}",
+                "need ≥ 1 gather ray, k ≥ 2, max depth ≥ 1, positive finite radius fractions and α in (0, 1]; got {} gather rays, k = {}, radii {:?} and {:?}",
                 s.gather_rays, s.k, s.global_radius, s.caustic_radius
             )));
         }
@@ -141,15 +142,35 @@ impl PhotonMapper {
     ) -> Result<Self, PhotonMappingError> {
         Self::check(&settings)?;
         let s = &settings;
-        let radius = 0.5 * (scene.bounds.1 - scene.bounds.0).length();
+        let scene_radius = 0.5 * (scene.bounds.1 - scene.bounds.0).length();
+        let global = PhotonMap::new(global)?;
+        let caustic = PhotonMap::new(caustic)?;
+        let g = s
+            .global_radius
+            .resolve(&global, s.k, scene_radius, CAP_GLOBAL);
+        let c = s
+            .caustic_radius
+            .resolve(&caustic, s.k, scene_radius, CAP_CAUSTIC);
+        let mut notes = notes;
+        notes.push(format!(
+            "lookup     k = {}; d_max global {}, caustic {}",
+            s.k,
+            describe(&g, scene_radius),
+            describe(&c, scene_radius)
+        ));
         Ok(Self {
-            global: PhotonMap::new(global)?,
-            caustic: PhotonMap::new(caustic)?,
-            global_lookup: Lookup::new(s.k, s.global_radius * radius),
-            caustic_lookup: Lookup::new(s.k, s.caustic_radius * radius),
+            global,
+            caustic,
+            global_lookup: Lookup::new(s.k, g.radius),
+            caustic_lookup: Lookup::new(s.k, c.radius),
             settings,
             notes,
         })
+    }
+
+    /// The lookups of the global and the caustic map (their resolved maximum radii).
+    pub fn lookups(&self) -> (&Lookup, &Lookup) {
+        (&self.global_lookup, &self.caustic_lookup)
     }
 
     /// The photon maps `(global, caustic)`.
@@ -305,6 +326,29 @@ impl PhotonMapper {
             break;
         }
         l
+    }
+}
+
+/// The global map's largest radius under the density rule, and its radius when the rule has
+/// nothing to read (a fraction of the scene's bounding-sphere radius; Mitsuba 0.6's default).
+const CAP_GLOBAL: f64 = 0.05;
+/// The caustic map's (Mitsuba 0.6's default).
+const CAP_CAUSTIC: f64 = 0.0125;
+
+/// A resolved radius for the summary: its size, as a share of the scene's radius, and where it
+/// came from.
+fn describe(r: &Resolved, scene_radius: f64) -> String {
+    let share = 100.0 * r.radius / scene_radius;
+    match (r.density, r.capped) {
+        (Some(rho), false) => format!(
+            "{:.4} ({share:.2}% of the scene; typical density {rho:.3e} per unit area)",
+            r.radius
+        ),
+        (Some(rho), true) => format!(
+            "{:.4} ({share:.2}% of the scene, the cap; typical density {rho:.3e} per unit area)",
+            r.radius
+        ),
+        (None, _) => format!("{:.4} ({share:.2}% of the scene; fixed)", r.radius),
     }
 }
 

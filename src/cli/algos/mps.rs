@@ -75,11 +75,12 @@ pub const ENTRY: Entry = Entry {
         }
         mutations.validate()?;
         let pm = &a.pm;
+        let (global_radius, caustic_radius) = pm.radii();
         let gather = PhotonMapping {
             gather_rays: pm.gather_rays,
             k: pm.photon_k,
-            global_radius: pm.global_radius,
-            caustic_radius: pm.caustic_radius,
+            global_radius,
+            caustic_radius,
             ..PhotonMapping::new(c.max_edges)
         };
         let settings = MpsSettings {

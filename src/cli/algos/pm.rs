@@ -3,7 +3,7 @@
 use crate::cli::CliError;
 use crate::cli::registry::Entry;
 use clap::Args;
-use light_transport::photon::{PhotonMapper, PhotonMapping};
+use light_transport::photon::{MaxRadius, PhotonMapper, PhotonMapping};
 use light_transport::renderer::Passes;
 
 /// Options of photon mapping (pm).
@@ -21,13 +21,33 @@ pub struct PmArgs {
     /// Photon mapping: photons per radiance estimate (the paper's n).
     #[arg(long, default_value_t = 60)]
     pub photon_k: usize,
-    /// Photon mapping: largest lookup radius of the global map, as a fraction of the scene's
-    /// bounding-sphere radius.
-    #[arg(long, default_value_t = 0.05)]
-    pub global_radius: f64,
-    /// Photon mapping: largest lookup radius of the caustic map, same units.
-    #[arg(long, default_value_t = 0.0125)]
-    pub caustic_radius: f64,
+    /// Photon mapping: a fixed largest lookup radius for the global map, as a fraction of the
+    /// scene's bounding-sphere radius (Mitsuba 0.6 uses 0.05) [default: from the map's photon
+    /// density, see --radius-alpha].
+    #[arg(long)]
+    pub global_radius: Option<f64>,
+    /// Photon mapping: a fixed largest lookup radius for the caustic map, same units (Mitsuba 0.6
+    /// uses 0.0125) [default: from the map's photon density].
+    #[arg(long)]
+    pub caustic_radius: Option<f64>,
+    /// Photon mapping: the largest lookup radius of a map without a fixed one is
+    /// √(k / (π α ρ̃)), ρ̃ its typical photon density: estimates stop growing where the map is
+    /// sparser than α times that (the paper's α = 0.1).
+    #[arg(long, default_value_t = 0.1)]
+    pub radius_alpha: f64,
+}
+
+impl PmArgs {
+    /// The global and caustic maps' radius rules.
+    pub fn radii(&self) -> (MaxRadius, MaxRadius) {
+        let rule = |fixed: Option<f64>| match fixed {
+            Some(f) => MaxRadius::Fraction(f),
+            None => MaxRadius::Density {
+                alpha: self.radius_alpha,
+            },
+        };
+        (rule(self.global_radius), rule(self.caustic_radius))
+    }
 }
 
 /// Photon mapping (Jensen 2001) with the storage convention of Fan et al. 2005.
@@ -37,13 +57,14 @@ pub const ENTRY: Entry = Entry {
     unbiased: false,
     build: |scene, c, a| {
         let p = &a.pm;
+        let (global_radius, caustic_radius) = p.radii();
         let settings = PhotonMapping {
             global_paths: p.global_photons,
             caustic_paths: p.caustic_photons,
             gather_rays: p.gather_rays,
             k: p.photon_k,
-            global_radius: p.global_radius,
-            caustic_radius: p.caustic_radius,
+            global_radius,
+            caustic_radius,
             ..PhotonMapping::new(c.max_edges)
         };
         let mapper = PhotonMapper::new(scene, settings).map_err(|e| {
