@@ -185,11 +185,13 @@ fn integrator_benches(c: &mut Criterion) {
         max_edges: 9,
         heuristic: MisHeuristic::Power,
         roulette_after: None,
+        shadow_roulette: None,
     };
     let bdpt = Bdpt {
         walk,
         heuristic: MisHeuristic::Power,
         roulette: None,
+        shadow_roulette: None,
     };
     for name in builtin::BUILTIN {
         let s = Scene::new(&builtin::builtin(name).unwrap(), Some((64, 64))).unwrap();
@@ -224,6 +226,7 @@ fn scaling_benches(c: &mut Criterion) {
         walk: WalkSettings { max_edges: 9 },
         heuristic: MisHeuristic::Power,
         roulette: None,
+        shadow_roulette: None,
     };
     g.throughput(Throughput::Elements(128 * 128));
     for threads in [1, 2] {

@@ -190,6 +190,39 @@ fn every_subcommand_runs_on_a_tiny_image() {
         ]));
         assert!(!ok && e.contains("α in (0, 1]"), "{flag} {value}: {e}");
     }
+    // Russian roulette on shadow rays (PT and BDPT) is reported; a bad fraction is an error.
+    for algo in ["pt", "bdpt"] {
+        let (ok, out, e) = run(charted().args([
+            "render",
+            "cornell",
+            "--algo",
+            algo,
+            "--spp",
+            "1",
+            "--resolution",
+            "24x16",
+            "--shadow-roulette",
+            "0.05",
+            "-o",
+            &o("shadow.exr"),
+        ]));
+        assert!(ok && out.contains("roulette on shadow rays"), "{out}{e}");
+        let (ok, _, e) = run(charted().args([
+            "render",
+            "cornell",
+            "--algo",
+            algo,
+            "--spp",
+            "1",
+            "--resolution",
+            "8x8",
+            "--shadow-roulette",
+            "NaN",
+            "-o",
+            &o("shadow-bad.exr"),
+        ]));
+        assert!(!ok && e.contains("shadow-roulette"), "{e}");
+    }
     // Metropolis photon sampling with the shipped user paths of `box`; a bad user-path file is an
     // error naming its line.
     let (ok, out, e) = run(charted().args([

@@ -57,6 +57,7 @@ fn a_fractional_last_pass_is_unbiased() {
         max_edges: MAX_EDGES,
         heuristic: MisHeuristic::Power,
         roulette_after: None,
+        shadow_roulette: None,
     };
     let p_lt = min_p(
         &renders(&scene, &lt, 0.3, 0.3),

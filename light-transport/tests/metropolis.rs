@@ -205,6 +205,7 @@ fn pssmlt(importance: ImportanceKind) -> Pssmlt {
             },
             heuristic: MisHeuristic::Power,
             roulette: None,
+            shadow_roulette: None,
         },
         kelemen: Kelemen::default(),
         importance,

@@ -1,14 +1,20 @@
 //! Bidirectional path tracing with all strategies (Veach 1997 ch. 10), MIS by the balance or
 //! power heuristic. Strategy `(1, 1)` is left to `(0, 2)` as in pbrt; `(s, 1)` strategies splat.
+//!
+//! Each strategy's MIS weight is computed before its shadow ray, which is traced only for a
+//! contribution that is not zero; with [`Bdpt::shadow_roulette`], small contributions trace it
+//! only by Russian roulette ([`super::shadow_roulette`]).
 
+use super::shadow_roulette::ShadowRoulette;
 use super::{Estimator, Splat};
 use crate::path::{
-    MisHeuristic, Roulette, Vertex, WalkSettings, camera_subpath_with, connect, light_subpath_with,
-    mis_weight,
+    MisHeuristic, Roulette, Vertex, WalkSettings, camera_subpath_with, connect_unoccluded,
+    light_subpath_with, mis_weight, unoccluded,
 };
 use crate::sampler::IndependentStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
+use mcmc_core::rng::ChainRng;
 use std::cell::RefCell;
 
 thread_local! {
@@ -24,17 +30,23 @@ pub struct Bdpt {
     pub heuristic: MisHeuristic,
     /// Russian roulette in both subpath walks (`None`: every walk runs to the length limit).
     pub roulette: Option<Roulette>,
+    /// Russian roulette on the shadow rays of weighted contributions below its threshold
+    /// (`None`: every shadow ray is traced). Used by BDPT's own samples, never by PSSMLT's
+    /// evaluation of a state (which must be a deterministic function of its numbers).
+    pub shadow_roulette: Option<ShadowRoulette>,
 }
 
 impl Bdpt {
     /// Sum of the MIS-weighted contributions of every strategy of a pair of subpaths: the pixel
-    /// estimate is returned, `(s, 1)` contributions are pushed to `splats`.
+    /// estimate is returned, `(s, 1)` contributions are pushed to `splats`. With `rng`, shadow
+    /// rays follow [`Bdpt::shadow_roulette`] (module docs); without, every one is traced.
     pub fn evaluate(
         &self,
         scene: &Scene,
         light: &[Vertex],
         camera: &[Vertex],
         splats: &mut Vec<Splat>,
+        mut rng: Option<&mut ChainRng>,
     ) -> Rgb {
         let mut l = Rgb::BLACK;
         for t in 1..=camera.len() {
@@ -43,16 +55,29 @@ impl Bdpt {
                 if (s == 1 && t == 1) || edges < 1 || edges > self.walk.max_edges {
                     continue;
                 }
-                let Some(c) = connect(scene, light, camera, s, t) else {
+                let Some(c) = connect_unoccluded(scene, light, camera, s, t) else {
                     continue;
                 };
                 let w = mis_weight(scene, light, camera, s, t, self.heuristic);
                 if w == 0.0 {
                     continue;
                 }
+                let mut value = c.value * w;
+                if s > 0 {
+                    if let (Some(roulette), Some(rng)) = (self.shadow_roulette, rng.as_deref_mut())
+                    {
+                        let Some(boost) = roulette.survive(value.luminance(), rng) else {
+                            continue;
+                        };
+                        value *= boost;
+                    }
+                    if !unoccluded(scene, &light[s - 1], &camera[t - 1]) {
+                        continue;
+                    }
+                }
                 match c.raster {
-                    Some(r) => splats.push((r, c.value * w)),
-                    None => l += c.value * w,
+                    Some(r) => splats.push((r, value)),
+                    None => l += value,
                 }
             }
         }
@@ -85,7 +110,7 @@ impl Estimator for Bdpt {
                 self.roulette,
                 light,
             );
-            self.evaluate(scene, light, cam, splats)
+            self.evaluate(scene, light, cam, splats, Some(&mut stream.rng))
         })
     }
     fn splats(&self) -> bool {

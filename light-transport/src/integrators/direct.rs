@@ -23,6 +23,10 @@ pub fn mis(a: f64, b: f64, h: MisHeuristic) -> f64 {
 /// chosen with `choice` at `u_light`: `f L_e |cos| w / p`, with the MIS weight `w` against
 /// `bsdf_samples` BSDF samples (1 in a path tracer; a final gather's ray count). Point lights get
 /// weight 1. Black when the sample is occluded, behind the light or carries nothing.
+///
+/// `survive` sees the contribution before its shadow ray is traced and returns the factor to scale
+/// it by, or `None` to skip the ray (Russian roulette on shadow rays, [`super::ShadowRoulette`];
+/// `|_| Some(1.0)` traces every ray).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn next_event(
@@ -34,6 +38,7 @@ pub fn next_event(
     u_light: [f64; 2],
     heuristic: MisHeuristic,
     bsdf_samples: f64,
+    survive: impl FnOnce(Rgb) -> Option<f64>,
 ) -> Rgb {
     let Some((li, p_choice)) = scene.light_distribution.sample(choice) else {
         return Rgb::BLACK;
@@ -63,14 +68,21 @@ pub fn next_event(
     if le.is_black() || f.is_black() || !pdf_solid.is_finite() || !(pdf_solid > 0.0) {
         return Rgb::BLACK;
     }
-    let light_normal = if delta { None } else { Some(lp.n) };
-    if !scene.visible(p.p, Some(p.n), lp.p, light_normal) {
-        return Rgb::BLACK;
-    }
     let w = if delta {
         1.0
     } else {
         mis(pdf_solid, bsdf_samples * bsdf.pdf(wo, wi), heuristic)
     };
-    f * le * (wi.dot(p.ns).abs() * w / pdf_solid)
+    let value = f * le * (wi.dot(p.ns).abs() * w / pdf_solid);
+    if value.is_black() {
+        return Rgb::BLACK;
+    }
+    let Some(boost) = survive(value) else {
+        return Rgb::BLACK;
+    };
+    let light_normal = if delta { None } else { Some(lp.n) };
+    if !scene.visible(p.p, Some(p.n), lp.p, light_normal) {
+        return Rgb::BLACK;
+    }
+    value * boost
 }

@@ -17,10 +17,12 @@ mod bdpt;
 pub mod direct;
 mod lt;
 mod pt;
+pub mod shadow_roulette;
 
 pub use bdpt::Bdpt;
 pub use lt::LightTracer;
 pub use pt::PathTracer;
+pub use shadow_roulette::{ShadowRoulette, mean_luminance};
 
 pub use crate::budget::Budget;
 pub use crate::film::Splat;

@@ -1,8 +1,10 @@
 //! Path tracing with next-event estimation, combining BSDF and light sampling of emitters by MIS
-//! (Veach & Guibas 1995), with optional Russian roulette. Written independently of the
+//! (Veach & Guibas 1995), with optional Russian roulette on the path and on the shadow rays of
+//! next-event estimation ([`super::shadow_roulette`]). Written independently of the
 //! bidirectional path machinery so the two check each other.
 
 use super::direct::{mis, next_event};
+use super::shadow_roulette::ShadowRoulette;
 use super::{Estimator, Splat};
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, offset_origin};
@@ -20,6 +22,9 @@ pub struct PathTracer {
     pub heuristic: MisHeuristic,
     /// Start Russian roulette after this many bounces (`None`: never).
     pub roulette_after: Option<usize>,
+    /// Russian roulette on the shadow rays of next-event contributions below its threshold
+    /// (`None`: every shadow ray is traced).
+    pub shadow_roulette: Option<ShadowRoulette>,
 }
 
 impl Default for PathTracer {
@@ -30,6 +35,7 @@ impl Default for PathTracer {
             max_edges: 9,
             heuristic: MisHeuristic::Power,
             roulette_after: None,
+            shadow_roulette: None,
         }
     }
 }
@@ -81,7 +87,22 @@ impl Estimator for PathTracer {
             let choice = stream.next_1d();
             let u_light = stream.next_2d();
             if !bsdf.is_delta_only() {
-                l += beta * next_event(scene, &p, wo, &bsdf, choice, u_light, self.heuristic, 1.0);
+                let survive = |c: Rgb| match self.shadow_roulette {
+                    Some(r) => r.survive((beta * c).luminance(), &mut stream.rng),
+                    None => Some(1.0),
+                };
+                l += beta
+                    * next_event(
+                        scene,
+                        &p,
+                        wo,
+                        &bsdf,
+                        choice,
+                        u_light,
+                        self.heuristic,
+                        1.0,
+                        survive,
+                    );
             }
             // Continue by BSDF sampling from this vertex's block.
             // Vertex `bounces + 1` of the camera subpath.

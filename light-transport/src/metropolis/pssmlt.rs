@@ -89,7 +89,7 @@ impl Pssmlt {
             );
             let own = self
                 .bdpt
-                .evaluate(scene, light, cam, &mut state.contribution.splats);
+                .evaluate(scene, light, cam, &mut state.contribution.splats, None);
             let raster = scene.camera.raster_of_film([
                 state.sample.get(CAMERA_STREAM, layout::FILM),
                 state.sample.get(CAMERA_STREAM, layout::FILM + 1),

@@ -258,7 +258,17 @@ impl PhotonMapper {
         // Direct light by next-event estimation (MIS with the gather rays).
         let choice = uniform(&mut rng.rng);
         let u_light = [uniform(&mut rng.rng), uniform(&mut rng.rng)];
-        l += next_event(scene, p, wo, bsdf, choice, u_light, MisHeuristic::Power, g);
+        l += next_event(
+            scene,
+            p,
+            wo,
+            bsdf,
+            choice,
+            u_light,
+            MisHeuristic::Power,
+            g,
+            |_| Some(1.0),
+        );
         // Indirect light by gather rays.
         let mut gathered = Rgb::BLACK;
         for _ in 0..self.settings.gather_rays {

@@ -75,6 +75,7 @@ pub fn bdpt_batches(scene: &Scene) -> Vec<Vec<f64>> {
         },
         heuristic: MisHeuristic::Power,
         roulette: None,
+        shadow_roulette: None,
     };
     (0..16)
         .map(|b| {

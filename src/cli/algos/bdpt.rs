@@ -1,10 +1,12 @@
 //! Bidirectional path tracing.
 
+use crate::cli::CliError;
 use crate::cli::registry::{Common, Entry};
 use clap::Args;
-use light_transport::integrators::Bdpt;
+use light_transport::integrators::{Bdpt, Estimator, ShadowRoulette, mean_luminance};
 use light_transport::path::{Roulette, WalkSettings};
 use light_transport::renderer::Passes;
+use light_transport::scene::Scene;
 
 /// Options of bidirectional path tracing (bdpt).
 #[derive(Args, Debug, Clone)]
@@ -13,19 +15,67 @@ pub struct BdptArgs {
     /// first surface vertex; 0 = off, every walk runs to --max-depth).
     #[arg(long, default_value_t = 0)]
     pub roulette: usize,
+    /// BDPT and PT: Russian roulette on the shadow rays of contributions below this fraction
+    /// of the image's mean luminance (estimated by a pilot of 4096 samples); 0 = off, every
+    /// shadow ray is traced.
+    #[arg(long, default_value_t = 0.0)]
+    pub shadow_roulette: f64,
 }
+
+/// Pilot samples that estimate the image's mean luminance for --shadow-roulette.
+const PILOT_SAMPLES: usize = 4096;
+/// Their seed (fixed: the same threshold for any thread count and run).
+const PILOT_SEED: u64 = 0x5AD0_F011;
 
 /// Bidirectional path tracing.
 pub const ENTRY: Entry = Entry {
     name: "bdpt",
     about: "Bidirectional path tracing, all strategies, MIS",
     unbiased: true,
-    build: |_, c, a| {
+    build: |scene, c, a| {
         let mut b = bdpt(c);
         b.roulette = roulette(&a.bdpt);
-        Ok(Box::new(Passes::new(b)))
+        b.shadow_roulette = shadow_roulette(&a.bdpt, scene, &b)?;
+        Ok(Box::new(Passes {
+            estimator: b,
+            details: |b, _| shadow_note(b.shadow_roulette),
+        }))
     },
 };
+
+/// The shadow-ray roulette of `--shadow-roulette` for `estimator` (which must trace every shadow
+/// ray: it is the pilot), `None` for 0 or an image that the pilot sees black.
+pub fn shadow_roulette<E: Estimator>(
+    a: &BdptArgs,
+    scene: &Scene,
+    estimator: &E,
+) -> Result<Option<ShadowRoulette>, CliError> {
+    let fraction = a.shadow_roulette;
+    if !(fraction >= 0.0 && fraction.is_finite()) {
+        return Err(CliError::Render(light_transport::Error::InvalidParameter {
+            name: "shadow-roulette".into(),
+            reason: format!("must be a finite fraction ≥ 0, got {fraction}"),
+        }));
+    }
+    if fraction == 0.0 {
+        return Ok(None);
+    }
+    let mean = mean_luminance(estimator, scene, PILOT_SAMPLES, PILOT_SEED);
+    Ok((mean > 0.0).then_some(ShadowRoulette {
+        threshold: fraction * mean,
+    }))
+}
+
+/// The report line of a shadow-ray roulette.
+pub fn shadow_note(r: Option<ShadowRoulette>) -> Vec<String> {
+    r.map(|r| {
+        vec![format!(
+            "shadow     roulette on shadow rays of contributions below luminance {:.3e}",
+            r.threshold
+        )]
+    })
+    .unwrap_or_default()
+}
 
 /// The roulette of `--roulette` (`None` for 0).
 pub fn roulette(a: &BdptArgs) -> Option<Roulette> {
@@ -40,5 +90,6 @@ pub fn bdpt(c: &Common) -> Bdpt {
         },
         heuristic: c.heuristic,
         roulette: None,
+        shadow_roulette: None,
     }
 }

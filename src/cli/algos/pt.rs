@@ -1,5 +1,6 @@
 //! Path tracing.
 
+use super::bdpt::{shadow_note, shadow_roulette};
 use crate::cli::registry::Entry;
 use light_transport::integrators::PathTracer;
 use light_transport::renderer::Passes;
@@ -9,11 +10,16 @@ pub const ENTRY: Entry = Entry {
     name: "pt",
     about: "Path tracing with next-event estimation and MIS",
     unbiased: true,
-    build: |_, c, _| {
-        Ok(Box::new(Passes::new(PathTracer {
+    build: |scene, c, a| {
+        let mut pt = PathTracer {
             max_edges: c.max_edges,
             heuristic: c.heuristic,
             ..PathTracer::default()
-        })))
+        };
+        pt.shadow_roulette = shadow_roulette(&a.bdpt, scene, &pt)?;
+        Ok(Box::new(Passes {
+            estimator: pt,
+            details: |pt, _| shadow_note(pt.shadow_roulette),
+        }))
     },
 };
