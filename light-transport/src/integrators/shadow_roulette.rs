@@ -37,13 +37,15 @@ impl ShadowRoulette {
         if q.is_nan() || uniform(rng) >= q {
             return None;
         }
-        Some(1.0 / q)
+        // τ/lum rather than 1/q; a boost that overflows (a subnormal luminance) skips the ray.
+        let boost = self.threshold / lum;
+        boost.is_finite().then_some(boost)
     }
 }
 
 /// An estimate of the mean luminance of the image `estimator` renders, from `samples` of its
-/// samples at pixels drawn uniformly (splats included): seeded, so the same for any thread count.
-/// 0 when nothing is seen or the estimate is not finite.
+/// samples at pixels drawn uniformly (splats included; non-finite values left out, as the film
+/// leaves them out): seeded, so the same for any thread count. 0 when nothing is seen.
 pub fn mean_luminance<E: Estimator>(
     estimator: &E,
     scene: &Scene,
@@ -62,7 +64,12 @@ pub fn mean_luminance<E: Estimator>(
         let mut sampler = IndependentStream::new(stream(seed, i as u64));
         splats.clear();
         let v = estimator.sample(scene, pixel, &mut sampler, &mut splats);
-        sum += v.luminance() + splats.iter().map(|(_, c)| c.luminance()).sum::<f64>();
+        let finite = |l: f64| if l.is_finite() { l } else { 0.0 };
+        sum += finite(v.luminance())
+            + splats
+                .iter()
+                .map(|(_, c)| finite(c.luminance()))
+                .sum::<f64>();
     }
     let mean = sum / samples as f64;
     if mean.is_finite() && mean > 0.0 {

@@ -116,7 +116,9 @@ impl PhotonMapper {
         Self::from_photons(scene, settings, global, caustic, notes)
     }
 
-    fn check(s: &PhotonMapping) -> Result<(), PhotonMappingError> {
+    /// Whether the settings are usable: the error a mapper built from them would give (Metropolis
+    /// photon sampling checks before it samples).
+    pub fn check(s: &PhotonMapping) -> Result<(), PhotonMappingError> {
         if s.gather_rays == 0
             || s.k < 2
             || s.max_edges < 1
@@ -358,7 +360,11 @@ fn describe(r: &Resolved, scene_radius: f64) -> String {
             "{:.4} ({share:.2}% of the scene, the cap; typical density {rho:.3e} per unit area)",
             r.radius
         ),
-        (None, _) => format!("{:.4} ({share:.2}% of the scene; fixed)", r.radius),
+        (None, true) => format!(
+            "{:.4} ({share:.2}% of the scene, the cap: too few photons to read a density)",
+            r.radius
+        ),
+        (None, false) => format!("{:.4} ({share:.2}% of the scene; fixed)", r.radius),
     }
 }
 

@@ -61,7 +61,13 @@ pub fn shadow_roulette<E: Estimator>(
         return Ok(None);
     }
     let mean = mean_luminance(estimator, scene, PILOT_SAMPLES, PILOT_SEED);
-    Ok((mean > 0.0).then_some(ShadowRoulette {
+    if !(mean > 0.0) {
+        eprintln!(
+            "note: --shadow-roulette is off: its pilot of {PILOT_SAMPLES} samples saw a black image"
+        );
+        return Ok(None);
+    }
+    Ok(Some(ShadowRoulette {
         threshold: fraction * mean,
     }))
 }

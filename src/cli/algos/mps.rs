@@ -75,7 +75,7 @@ pub const ENTRY: Entry = Entry {
         }
         mutations.validate()?;
         let pm = &a.pm;
-        let (global_radius, caustic_radius) = pm.radii();
+        let (global_radius, caustic_radius) = pm.radii()?;
         let gather = PhotonMapping {
             gather_rays: pm.gather_rays,
             k: pm.photon_k,
@@ -83,6 +83,8 @@ pub const ENTRY: Entry = Entry {
             caustic_radius,
             ..PhotonMapping::new(c.max_edges)
         };
+        // Settings the final gather would refuse are refused before any chain runs.
+        PhotonMapper::check(&gather).map_err(|e| super::pm::settings_error(e.to_string()))?;
         let settings = MpsSettings {
             metropolis: light_transport::metropolis::MetropolisSettings {
                 budget: Budget::SamplesPerPixel(p.photon_mutations),

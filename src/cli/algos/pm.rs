@@ -38,16 +38,29 @@ pub struct PmArgs {
 }
 
 impl PmArgs {
-    /// The global and caustic maps' radius rules.
-    pub fn radii(&self) -> (MaxRadius, MaxRadius) {
+    /// The global and caustic maps' radius rules; `--radius-alpha` is checked even when both
+    /// radii are fixed.
+    pub fn radii(&self) -> Result<(MaxRadius, MaxRadius), CliError> {
+        let alpha = self.radius_alpha;
+        if !(alpha > 0.0 && alpha <= 1.0) {
+            return Err(settings_error(format!(
+                "--radius-alpha must be in (0, 1], got {alpha}"
+            )));
+        }
         let rule = |fixed: Option<f64>| match fixed {
             Some(f) => MaxRadius::Fraction(f),
-            None => MaxRadius::Density {
-                alpha: self.radius_alpha,
-            },
+            None => MaxRadius::Density { alpha },
         };
-        (rule(self.global_radius), rule(self.caustic_radius))
+        Ok((rule(self.global_radius), rule(self.caustic_radius)))
     }
+}
+
+/// A photon-mapping settings error for the CLI.
+pub fn settings_error(reason: String) -> CliError {
+    CliError::Render(light_transport::Error::InvalidParameter {
+        name: "pm".into(),
+        reason,
+    })
 }
 
 /// Photon mapping (Jensen 2001) with the storage convention of Fan et al. 2005.
@@ -57,7 +70,7 @@ pub const ENTRY: Entry = Entry {
     unbiased: false,
     build: |scene, c, a| {
         let p = &a.pm;
-        let (global_radius, caustic_radius) = p.radii();
+        let (global_radius, caustic_radius) = p.radii()?;
         let settings = PhotonMapping {
             global_paths: p.global_photons,
             caustic_paths: p.caustic_photons,
@@ -67,12 +80,8 @@ pub const ENTRY: Entry = Entry {
             caustic_radius,
             ..PhotonMapping::new(c.max_edges)
         };
-        let mapper = PhotonMapper::new(scene, settings).map_err(|e| {
-            CliError::Render(light_transport::Error::InvalidParameter {
-                name: "pm".into(),
-                reason: e.to_string(),
-            })
-        })?;
+        let mapper =
+            PhotonMapper::new(scene, settings).map_err(|e| settings_error(e.to_string()))?;
         Ok(Box::new(Passes {
             estimator: mapper,
             details: PhotonMapper::summary,
