@@ -36,7 +36,8 @@ for scene in $scenes; do
         $bin render "$scene" --algo "$algo" --resolution $res --max-depth $depth --time "$time" \
           --seed $seed --shadow-roulette $frac -o "$img" > "$out/log" 2>&1
         spp=$(sed -nE 's/^samples +([0-9.]+) spp.*/\1/p' "$out/log")
-        d=$($bin diff "$img" "$ref" | head -1)
+        d=$($bin diff "$img" "$ref")
+        d=${d%%$'\n'*}
         rmse=$(grep -oP 'RMSE \K[0-9.e+-]+' <<<"$d")
         mae=$(grep -oP 'MAE \K[0-9.e+-]+' <<<"$d")
         erms=$(grep -oP 'E_rms \K[0-9.e+-]+' <<<"$d")
