@@ -1,7 +1,7 @@
 //! The bounding volume hierarchy: obvhs' compressed wide BVH (CWBVH, built with PLOC) over
 //! triangles and spheres. Traversal runs in f32 on boxes padded by a relative epsilon so rounding
 //! cannot lose a hit; primitives are intersected in f64 and the closest f64 hit is kept. Triangles
-//! whose bounding box is mostly empty enter the BVH as several references ([`split`]).
+//! whose bounding box is mostly empty enter the BVH as several references (`split`).
 
 use crate::geometry::{Hit, Sphere, Triangle, TriangleShading};
 use crate::math::DVec3;
@@ -25,7 +25,7 @@ pub enum Primitive {
 }
 
 impl Primitive {
-    /// The boxes under which the BVH references the primitive (see [`split`]).
+    /// The boxes under which the BVH references the primitive (see `split`).
     pub fn references(&self, out: &mut Vec<(DVec3, DVec3)>) {
         match self {
             Primitive::Triangle(t) => split::triangle_boxes(t.p, out),
