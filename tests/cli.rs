@@ -24,6 +24,21 @@ fn run(cmd: &mut Command) -> (bool, String, String) {
     )
 }
 
+/// `charted render cornell --algo ALGO --spp 1 --resolution RES EXTRA… -o OUT`.
+fn render_cornell(algo: &str, res: &str, extra: &[&str], out: &str) -> (bool, String, String) {
+    let args = [
+        "render",
+        "cornell",
+        "--algo",
+        algo,
+        "--spp",
+        "1",
+        "--resolution",
+        res,
+    ];
+    run(charted().args(args).args(extra).args(["-o", out]))
+}
+
 #[test]
 fn render_with_no_arguments_writes_the_default_scene() {
     let d = tmp("default");
@@ -174,53 +189,15 @@ fn every_subcommand_runs_on_a_tiny_image() {
     ]));
     assert!(!ok && e.contains("k ≥ 2"), "{e}");
     for (flag, value) in [("--radius-alpha", "0"), ("--global-radius", "NaN")] {
-        let (ok, _, e) = run(charted().args([
-            "render",
-            "cornell",
-            "--algo",
-            "pm",
-            "--spp",
-            "1",
-            "--resolution",
-            "8x8",
-            flag,
-            value,
-            "-o",
-            &o("pm-bad.exr"),
-        ]));
+        let (ok, _, e) = render_cornell("pm", "8x8", &[flag, value], &o("pm-bad.exr"));
         assert!(!ok && e.contains("(0, 1]"), "{flag} {value}: {e}");
     }
     // Russian roulette on shadow rays (PT and BDPT) is reported; a bad fraction is an error.
     for algo in ["pt", "bdpt"] {
-        let (ok, out, e) = run(charted().args([
-            "render",
-            "cornell",
-            "--algo",
-            algo,
-            "--spp",
-            "1",
-            "--resolution",
-            "24x16",
-            "--shadow-roulette",
-            "0.05",
-            "-o",
-            &o("shadow.exr"),
-        ]));
+        let flag = "--shadow-roulette";
+        let (ok, out, e) = render_cornell(algo, "24x16", &[flag, "0.05"], &o("shadow.exr"));
         assert!(ok && out.contains("roulette on shadow rays"), "{out}{e}");
-        let (ok, _, e) = run(charted().args([
-            "render",
-            "cornell",
-            "--algo",
-            algo,
-            "--spp",
-            "1",
-            "--resolution",
-            "8x8",
-            "--shadow-roulette",
-            "NaN",
-            "-o",
-            &o("shadow-bad.exr"),
-        ]));
+        let (ok, _, e) = render_cornell(algo, "8x8", &[flag, "NaN"], &o("shadow-bad.exr"));
         assert!(!ok && e.contains("shadow-roulette"), "{e}");
     }
     // Metropolis photon sampling with the shipped user paths of `box`; a bad user-path file is an

@@ -33,8 +33,8 @@ pub struct Bdpt {
     pub heuristic: MisHeuristic,
     /// Russian roulette in both subpath walks (`None`: every walk runs to the length limit).
     pub roulette: Option<Roulette>,
-    /// Russian roulette on the shadow rays of weighted contributions below its threshold
-    /// (`None`: every shadow ray is traced). Used by BDPT's own samples, never by PSSMLT's
+    /// Russian roulette on the shadow rays of contributions whose unweighted value is below its
+    /// threshold (`None`: every shadow ray is traced). Used by BDPT's own samples, never by PSSMLT's
     /// evaluation of a state (which must be a deterministic function of its numbers).
     pub shadow_roulette: Option<ShadowRoulette>,
 }
