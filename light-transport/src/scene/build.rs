@@ -56,8 +56,13 @@ impl Scene {
         // Geometry is built in two phases (`Bvh::topology`, `Bvh::assemble`): the primitives are
         // first only named, `(mesh, triangle)` or `(SPHERE, sphere)`, and created once the tree
         // is known, directly in leaf order, so a large mesh never exists twice in memory.
-        let mut prims: Vec<[u32; 2]> = Vec::new();
-        let mut prim_mat = Vec::new();
+        // Sized once (an upper bound: degenerate triangles are dropped), so that growing them
+        // does not briefly hold two copies of a large mesh's lists.
+        let count = desc.meshes.iter().map(|m| m.indices.len()).sum::<usize>()
+            + desc.spheres.len()
+            + 1;
+        let mut prims: Vec<[u32; 2]> = Vec::with_capacity(count);
+        let mut prim_mat = Vec::with_capacity(count);
         let mut emissive: Vec<(u32, AreaLightDesc)> = Vec::new();
         let material_index = |m: usize, what: &str| -> Result<u32> {
             let n = desc.materials.len() + 1;
