@@ -166,7 +166,7 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
         ));
     }
     let loaded = scene_arg::load(&a.scene)?;
-    let (scene, _) = scene_arg::build(&loaded, a.options.resolution)?;
+    let (scene, _) = scene_arg::build(&loaded, a.options.resolution, a.options.compact())?;
     let dir = a
         .output
         .clone()

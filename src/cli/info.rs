@@ -11,11 +11,14 @@ use light_transport::scene::MaterialDesc;
 pub struct InfoArgs {
     /// Scene: a built-in name or a pbrt-v3 file.
     pub scene: String,
+    /// Build the compact BVH (as `render --compact-bvh`).
+    #[arg(long)]
+    pub compact_bvh: bool,
 }
 
 pub fn run(a: InfoArgs) -> Result<(), CliError> {
     let loaded = scene_arg::load(&a.scene)?;
-    let (scene, build) = scene_arg::build(&loaded, None)?;
+    let (scene, build) = scene_arg::build(&loaded, None, super::options::compact(a.compact_bvh))?;
     let d = &loaded.description;
     let (tris, spheres) = scene.primitive_counts();
     println!("scene       {}", loaded.name);

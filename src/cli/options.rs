@@ -1,7 +1,8 @@
-//! Options every rendering command shares: seed, path length, resolution, exposure, MIS.
+//! Options every rendering command shares: seed, path length, resolution, exposure, MIS, BVH.
 
 use super::registry::Common;
 use clap::ValueEnum;
+use light_transport::accel::Compact;
 use light_transport::path::MisHeuristic;
 
 /// Options every rendering command shares.
@@ -22,9 +23,19 @@ pub struct RenderOptions {
     /// MIS heuristic.
     #[arg(long, value_enum, default_value_t = Heuristic::Power)]
     pub mis: Heuristic,
+    /// Build a smaller BVH for large meshes: the two triangles of a quad share one reference.
+    /// On a 1M-triangle height field: 0.78× the peak memory, 0.67× the build time, 0.90–0.93×
+    /// the rays per second. Images are the same.
+    #[arg(long)]
+    pub compact_bvh: bool,
 }
 
 impl RenderOptions {
+    /// The BVH build `--compact-bvh` asks for.
+    pub fn compact(&self) -> Compact {
+        compact(self.compact_bvh)
+    }
+
     /// The integrator options they imply.
     pub fn common(&self) -> Common {
         Common {
@@ -32,6 +43,11 @@ impl RenderOptions {
             heuristic: self.mis.into(),
         }
     }
+}
+
+/// The BVH build of a `--compact-bvh` flag.
+pub fn compact(flag: bool) -> Compact {
+    if flag { Compact::Pairs } else { Compact::No }
 }
 
 /// MIS heuristic option.

@@ -92,7 +92,7 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
         (None, None) => Budget::SamplesPerPixel(16.0),
     };
     let loaded = scene_arg::load(&a.scene)?;
-    let (scene, build_time) = scene_arg::build(&loaded, a.options.resolution)?;
+    let (scene, build_time) = scene_arg::build(&loaded, a.options.resolution, a.options.compact())?;
     for note in &scene.notes {
         eprintln!("note: {note}");
     }

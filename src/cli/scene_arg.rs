@@ -1,6 +1,7 @@
 //! Resolving a scene argument: a built-in name or a pbrt-v3 file.
 
 use super::CliError;
+use light_transport::accel::Compact;
 use light_transport::scene::{Scene, SceneDescription, builtin};
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -47,13 +48,14 @@ pub fn load(arg: &str) -> Result<Loaded, CliError> {
     })
 }
 
-/// Build the renderable scene, optionally at another resolution.
+/// Build the renderable scene, optionally at another resolution, its BVH `compact` or not.
 pub fn build(
     loaded: &Loaded,
     resolution: Option<(usize, usize)>,
+    compact: Compact,
 ) -> Result<(Scene, Duration), CliError> {
     let t = Instant::now();
-    let scene = Scene::new(&loaded.description, resolution)?;
+    let scene = Scene::with_bvh(&loaded.description, resolution, compact)?;
     Ok((scene, t.elapsed()))
 }
 

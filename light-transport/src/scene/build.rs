@@ -1,7 +1,7 @@
 //! The renderable scene: primitives in a BVH, materials, lights chosen by power, the camera.
 
 use super::description::*;
-use crate::accel::{Bvh, Primitive};
+use crate::accel::{Bvh, Compact, Primitive};
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
 use crate::geometry::{
@@ -46,6 +46,15 @@ pub struct Scene {
 impl Scene {
     /// Build from a description; the image size is the description's unless overridden.
     pub fn new(desc: &SceneDescription, resolution: Option<(usize, usize)>) -> Result<Self> {
+        Self::with_bvh(desc, resolution, Compact::No)
+    }
+
+    /// As [`Scene::new`], with the BVH built `compact` or not (see [`Compact`]).
+    pub fn with_bvh(
+        desc: &SceneDescription,
+        resolution: Option<(usize, usize)>,
+        compact: Compact,
+    ) -> Result<Self> {
         let cam = desc
             .camera
             .as_ref()
@@ -58,9 +67,8 @@ impl Scene {
         // is known, directly in leaf order, so a large mesh never exists twice in memory.
         // Sized once (an upper bound: degenerate triangles are dropped), so that growing them
         // does not briefly hold two copies of a large mesh's lists.
-        let count = desc.meshes.iter().map(|m| m.indices.len()).sum::<usize>()
-            + desc.spheres.len()
-            + 1;
+        let count =
+            desc.meshes.iter().map(|m| m.indices.len()).sum::<usize>() + desc.spheres.len() + 1;
         let mut prims: Vec<[u32; 2]> = Vec::with_capacity(count);
         let mut prim_mat = Vec::with_capacity(count);
         let mut emissive: Vec<(u32, AreaLightDesc)> = Vec::new();
@@ -172,7 +180,7 @@ impl Scene {
                 Primitive::Triangle(mesh_triangle(mesh, mesh.indices[j as usize])?)
             })
         };
-        let topology = Bvh::topology(prims.len(), |i, out| match primitive(prims[i]) {
+        let topology = Bvh::topology(prims.len(), compact, |i, out| match primitive(prims[i]) {
             Ok(p) => p.references(out),
             Err(_) => unreachable!("every primitive was checked above"),
         });

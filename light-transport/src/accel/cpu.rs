@@ -1,0 +1,26 @@
+//! Runtime CPU dispatch for ray queries. The default build targets baseline x86-64, where the
+//! compressed wide BVH's traversal (Ylitie et al. 2017) counts child bits without `popcnt` and
+//! `lzcnt`. [`has_v3`] says once per process whether the CPU has the x86-64-v3 features (AVX2,
+//! FMA, BMI1/2, LZCNT, POPCNT), and the BVH then runs copies of its queries compiled for them.
+//!
+//! Results are bit-identical either way: Rust never contracts `a·b + c` into a fused
+//! multiply-add on its own, and the explicit `mul_add`s round once on both paths. Setting
+//! `CHARTED_PORTABLE=1` in the environment forces the portable path (for measuring the
+//! difference).
+
+use std::sync::OnceLock;
+
+/// Whether this process runs the x86-64-v3 copies of the ray queries.
+#[cfg(target_arch = "x86_64")]
+pub fn has_v3() -> bool {
+    static V3: OnceLock<bool> = OnceLock::new();
+    *V3.get_or_init(|| {
+        std::env::var_os("CHARTED_PORTABLE").is_none_or(|v| v.is_empty() || v == "0")
+            && std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("fma")
+            && std::arch::is_x86_feature_detected!("bmi1")
+            && std::arch::is_x86_feature_detected!("bmi2")
+            && std::arch::is_x86_feature_detected!("lzcnt")
+            && std::arch::is_x86_feature_detected!("popcnt")
+    })
+}
