@@ -510,3 +510,20 @@ fn a_second_interrupt_quits_at_once() {
     assert!(!exr.exists(), "the first pass was finished and written");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `--compact-bvh` builds another BVH over the same geometry (cornell's quads share
+/// references): the image is the same, byte for byte.
+#[test]
+fn compact_bvh_renders_the_same_image() {
+    let d = tmp("compact");
+    let o = |f: &str| d.join(f).to_string_lossy().into_owned();
+    for (extra, out) in [
+        (&[][..], "plain.exr"),
+        (&["--compact-bvh"][..], "compact.exr"),
+    ] {
+        let (ok, _, e) = render_cornell("bdpt", "24x16", extra, &o(out));
+        assert!(ok, "{e}");
+    }
+    let read = |f: &str| std::fs::read(o(f)).expect("written");
+    assert_eq!(read("plain.exr"), read("compact.exr"));
+}
