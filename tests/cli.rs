@@ -192,6 +192,15 @@ fn every_subcommand_runs_on_a_tiny_image() {
         let (ok, _, e) = render_cornell("pm", "8x8", &[flag, value], &o("pm-bad.exr"));
         assert!(!ok && e.contains("(0, 1]"), "{flag} {value}: {e}");
     }
+    // Russian roulette in BDPT's walks is reported, in both walks or light walks only.
+    for (walks, line) in [
+        ("both", "camera and light subpaths"),
+        ("light", "roulette   light"),
+    ] {
+        let extra = ["--roulette", "1", "--roulette-walks", walks];
+        let (ok, out, e) = render_cornell("bdpt", "24x16", &extra, &o("walks.exr"));
+        assert!(ok && out.contains(line), "{walks}: {out}{e}");
+    }
     // Russian roulette on shadow rays (PT and BDPT) is reported; a bad fraction is an error.
     for algo in ["pt", "bdpt"] {
         let flag = "--shadow-roulette";

@@ -220,7 +220,10 @@ fn pssmlt(importance: ImportanceKind) -> Pssmlt {
 #[test]
 fn pssmlt_with_russian_roulette_converges_to_bdpt() {
     let mut m = pssmlt(ImportanceKind::Luminance);
-    m.bdpt.roulette = Some(Roulette { from: 1 });
+    m.bdpt.roulette = Some(Roulette {
+        from: 1,
+        camera: true,
+    });
     for name in builtin::BUILTIN {
         let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((W, H))).unwrap();
         let reference = bdpt_batches(&scene);

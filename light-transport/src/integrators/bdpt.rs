@@ -14,7 +14,7 @@ use crate::path::{
     MisHeuristic, Roulette, Vertex, WalkSettings, camera_subpath_with, connect_unoccluded,
     light_subpath_with, mis_weight, unoccluded,
 };
-use crate::sampler::IndependentStream;
+use crate::sampler::{IndependentStream, SampleStream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use mcmc_core::rng::ChainRng;
@@ -40,6 +40,33 @@ pub struct Bdpt {
 }
 
 impl Bdpt {
+    /// Both subpaths of one sample drawn from `stream` into `camera` and `light`, with this
+    /// estimator's length limits and roulette (`pixel`: as in [`camera_subpath_with`]).
+    pub fn trace_subpaths<S: SampleStream>(
+        &self,
+        scene: &Scene,
+        stream: &mut S,
+        pixel: Option<usize>,
+        camera: &mut Vec<Vertex>,
+        light: &mut Vec<Vertex>,
+    ) {
+        camera_subpath_with(
+            scene,
+            stream,
+            self.walk.max_camera_vertices(),
+            pixel,
+            Roulette::for_camera(self.roulette),
+            camera,
+        );
+        light_subpath_with(
+            scene,
+            stream,
+            self.walk.max_light_vertices(),
+            self.roulette,
+            light,
+        );
+    }
+
     /// Sum of the MIS-weighted contributions of every strategy of a pair of subpaths: the pixel
     /// estimate is returned, `(s, 1)` contributions are pushed to `splats`. With `rng`, shadow
     /// rays follow [`Bdpt::shadow_roulette`] (module docs); without, every one is traced.
@@ -102,21 +129,7 @@ impl Estimator for Bdpt {
     ) -> Rgb {
         SUBPATHS.with(|b| {
             let (cam, light) = &mut *b.borrow_mut();
-            camera_subpath_with(
-                scene,
-                stream,
-                self.walk.max_camera_vertices(),
-                Some(pixel),
-                self.roulette,
-                cam,
-            );
-            light_subpath_with(
-                scene,
-                stream,
-                self.walk.max_light_vertices(),
-                self.roulette,
-                light,
-            );
+            self.trace_subpaths(scene, stream, Some(pixel), cam, light);
             self.evaluate(scene, light, cam, splats, Some(&mut stream.rng))
         })
     }

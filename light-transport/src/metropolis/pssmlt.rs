@@ -13,7 +13,7 @@ use super::importance::ImportanceKind;
 use super::record::{Contribution, Recordable};
 use super::stream::PrimaryStream;
 use crate::integrators::Bdpt;
-use crate::path::{Vertex, camera_subpath_with, light_subpath_with};
+use crate::path::Vertex;
 use crate::sampler::{CAMERA_STREAM, STREAMS, layout};
 use crate::scene::Scene;
 use mcmc_core::kernel::Observer;
@@ -72,21 +72,8 @@ impl Pssmlt {
         SUBPATHS.with(|b| {
             let (cam, light) = &mut *b.borrow_mut();
             let mut stream = PrimaryStream::new(&mut state.sample);
-            camera_subpath_with(
-                scene,
-                &mut stream,
-                self.bdpt.walk.max_camera_vertices(),
-                None,
-                self.bdpt.roulette,
-                cam,
-            );
-            light_subpath_with(
-                scene,
-                &mut stream,
-                self.bdpt.walk.max_light_vertices(),
-                self.bdpt.roulette,
-                light,
-            );
+            self.bdpt
+                .trace_subpaths(scene, &mut stream, None, cam, light);
             let own = self
                 .bdpt
                 .evaluate(scene, light, cam, &mut state.contribution.splats, None);

@@ -67,10 +67,23 @@ pub const ROULETTE_FLOOR: f64 = 0.5;
 /// not (its technique fixes both subpaths' lengths, so a stop would only lose the sample), nor do
 /// the path-space methods: the technique charts' inverses and the path-space densities do not
 /// model it.
+///
+/// With `camera: false` only light subpaths stop: camera paths keep the densities their MIS
+/// weights assume, which matters where a long camera path through specular surfaces is the one
+/// strategy that works (measured in the README).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Roulette {
     /// First vertex index at which the walk may stop.
     pub from: usize,
+    /// Whether camera subpaths stop too (light subpaths always do).
+    pub camera: bool,
+}
+
+impl Roulette {
+    /// The roulette of a camera walk under `roulette`.
+    pub fn for_camera(roulette: Option<Roulette>) -> Option<Roulette> {
+        roulette.filter(|r| r.camera)
+    }
 }
 
 /// Trace a camera subpath of at most `max_vertices` vertices into `path` (cleared first). With
