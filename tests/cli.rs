@@ -192,14 +192,21 @@ fn every_subcommand_runs_on_a_tiny_image() {
         let (ok, _, e) = render_cornell("pm", "8x8", &[flag, value], &o("pm-bad.exr"));
         assert!(!ok && e.contains("(0, 1]"), "{flag} {value}: {e}");
     }
-    // Russian roulette in BDPT's walks is reported, in both walks or light walks only.
-    for (walks, line) in [
-        ("both", "camera and light subpaths"),
-        ("light", "roulette   light"),
-    ] {
-        let extra = ["--roulette", "1", "--roulette-walks", walks];
-        let (ok, out, e) = render_cornell("bdpt", "24x16", &extra, &o("walks.exr"));
-        assert!(ok && out.contains(line), "{walks}: {out}{e}");
+    // Russian roulette in the walks of BDPT and PSSMLT is reported, in both walks or light walks
+    // only; --roulette-walks without --roulette is an error.
+    for algo in ["bdpt", "pssmlt"] {
+        let lines = [
+            ("both", "camera and light subpaths"),
+            ("light", "roulette   light"),
+        ];
+        for (walks, line) in lines {
+            let extra = ["--roulette", "1", "--roulette-walks", walks];
+            let (ok, out, e) = render_cornell(algo, "24x16", &extra, &o("walks.exr"));
+            assert!(ok && out.contains(line), "{algo} {walks}: {out}{e}");
+        }
+        let extra = ["--roulette-walks", "light"];
+        let (ok, _, e) = render_cornell(algo, "8x8", &extra, &o("walks-bad.exr"));
+        assert!(!ok && e.contains("needs --roulette"), "{algo}: {e}");
     }
     // Russian roulette on shadow rays (PT and BDPT) is reported; a bad fraction is an error.
     for algo in ["pt", "bdpt"] {
@@ -535,4 +542,20 @@ fn compact_bvh_renders_the_same_image() {
     }
     let read = |f: &str| std::fs::read(o(f)).expect("written");
     assert_eq!(read("plain.exr"), read("compact.exr"));
+    // And the compact BVH is really another one: `info` counts fewer references.
+    let references = |extra: &[&str]| {
+        let (ok, out, e) = run(charted().args(["info", "cornell"]).args(extra));
+        assert!(ok, "{e}");
+        let line = out
+            .lines()
+            .find(|l| l.starts_with("bvh"))
+            .expect("a bvh line");
+        let n: usize = line
+            .split_whitespace()
+            .nth(1)
+            .and_then(|n| n.parse().ok())
+            .expect(line);
+        n
+    };
+    assert!(references(&["--compact-bvh"]) < references(&[]));
 }

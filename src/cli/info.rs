@@ -64,6 +64,12 @@ pub fn run(a: InfoArgs) -> Result<(), CliError> {
     );
     println!("textures    {}", d.textures.len());
     println!(
+        "bvh         {} references to {} primitives{}",
+        scene.bvh.references(),
+        scene.bvh.primitives.len(),
+        if a.compact_bvh { " (compact)" } else { "" }
+    );
+    println!(
         "load        parse {:.3} s, build {:.3} s",
         loaded.parse_time.as_secs_f64(),
         build.as_secs_f64()

@@ -10,17 +10,23 @@
 
 use std::sync::OnceLock;
 
-/// Whether this process runs the x86-64-v3 copies of the ray queries.
-#[cfg(target_arch = "x86_64")]
+/// Whether this process runs the x86-64-v3 copies of the ray queries: the CPU has the features
+/// and `CHARTED_PORTABLE` does not ask for the portable path.
 pub fn has_v3() -> bool {
     static V3: OnceLock<bool> = OnceLock::new();
     *V3.get_or_init(|| {
         std::env::var_os("CHARTED_PORTABLE").is_none_or(|v| v.is_empty() || v == "0")
-            && std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("fma")
-            && std::arch::is_x86_feature_detected!("bmi1")
-            && std::arch::is_x86_feature_detected!("bmi2")
-            && std::arch::is_x86_feature_detected!("lzcnt")
-            && std::arch::is_x86_feature_detected!("popcnt")
+            && cpu_has_v3()
     })
+}
+
+/// Whether the CPU has every feature the v3 copies are compiled for.
+pub fn cpu_has_v3() -> bool {
+    std::arch::is_x86_feature_detected!("avx")
+        && std::arch::is_x86_feature_detected!("avx2")
+        && std::arch::is_x86_feature_detected!("fma")
+        && std::arch::is_x86_feature_detected!("bmi1")
+        && std::arch::is_x86_feature_detected!("bmi2")
+        && std::arch::is_x86_feature_detected!("lzcnt")
+        && std::arch::is_x86_feature_detected!("popcnt")
 }

@@ -6,6 +6,7 @@
 use crate::geometry::{Hit, Sphere, Triangle, TriangleShading};
 use crate::math::DVec3;
 use glam::Vec3A;
+#[cfg(target_arch = "x86_64")]
 mod cpu;
 mod split;
 
@@ -184,10 +185,11 @@ enum Leaves {
 }
 
 /// Two consecutive primitives with one box each share a BVH reference when the box around both
-/// has at most this multiple of the larger one's half surface area: the two halves of a quad,
-/// neighbours in a strip. A ray entering that box would have tested both anyway; sharing halves
-/// the builder's references (and its memory) on such meshes. (1.25 pairs 945 002 of the
-/// benchmarks' 1 057 058 terrain triangles, 89%.)
+/// has at most this multiple of the mean of their half surface areas: the two halves of a quad,
+/// neighbours in a strip, whose boxes nearly coincide, so that a ray entering the shared box would
+/// mostly have tested both anyway. (The mean, not the larger area: a small primitive inside a large
+/// one's box does not pair with it.) Sharing halves the builder's references, and its memory, on
+/// such meshes.
 const PAIR: f64 = 1.25;
 
 /// Whether a build trades ray speed for memory ([`Bvh::topology`]).
@@ -197,18 +199,13 @@ pub enum Compact {
     #[default]
     No,
     /// Neighbouring triangles that fill one box share a reference ([`PAIR`]). On the
-    /// benchmarks' 1M-triangle terrain: peak memory 0.78× (256 → 200 MB), build 0.67×, rays/s
-    /// 0.90–0.93×.
+    /// benchmarks' 1M-triangle terrain: peak memory 0.80× (256 → 206 MB), build 0.67–0.74×,
+    /// rays/s 0.90–0.97× (README).
     Pairs,
 }
 
 /// Flag of a reference (in `Topology`) that stands for two primitives.
 const PAIRED: u32 = 1 << 31;
-
-fn half_area((lo, hi): (DVec3, DVec3)) -> f64 {
-    let e = (hi - lo).max(DVec3::ZERO);
-    e.x * e.y + e.y * e.z + e.z * e.x
-}
 
 fn to_f32(v: DVec3) -> Vec3A {
     Vec3A::new(v.x as f32, v.y as f32, v.z as f32)
@@ -273,9 +270,10 @@ impl Bvh {
         Self::assemble(topology, input, shading)
     }
 
-    /// Phase one of a build: the tree over `count` primitives, whose reference boxes
-    /// `references(i, out)` pushes (unpadded): a triangle's from [`Primitive::references`], one
-    /// box per sphere.
+    /// Phase one of a build: the tree over `count` primitives (fewer than 2³¹), whose reference
+    /// boxes `references(i, out)` pushes (unpadded): a triangle's from
+    /// [`Primitive::references`], one box per sphere; with [`Compact::Pairs`], neighbours that
+    /// fill one box share a reference.
     pub fn topology(
         count: usize,
         compact: Compact,
@@ -297,7 +295,8 @@ impl Bvh {
                 if let (Compact::Pairs, [c]) = (compact, &boxes[..]) {
                     let c = *c;
                     let both = (b.0.min(c.0), b.1.max(c.1));
-                    if half_area(both) <= PAIR * half_area(b).max(half_area(c)) {
+                    let area = |(lo, hi)| split::half_area(lo, hi);
+                    if 2.0 * area(both) <= PAIR * (area(b) + area(c)) {
                         aabbs.push(padded(both.0, both.1));
                         owner.push(j | PAIRED);
                         continue;
@@ -379,14 +378,15 @@ impl Bvh {
         };
         let leaves = if leaf.len() + pairs == primitives.len() {
             // Every primitive has exactly one reference, so positions are in leaf order.
-            debug_assert!(
+            assert!(
                 leaf.iter()
                     .scan(0u32, |n, &l| {
                         let at = *n;
                         *n += span(l) as u32;
                         Some(at == l & !PAIRED)
                     })
-                    .all(|ok| ok)
+                    .all(|ok| ok),
+                "one reference per primitive: positions follow leaf order"
             );
             if pairs == 0 {
                 Leaves::Direct
@@ -414,6 +414,15 @@ impl Bvh {
             original,
             shading,
             leaves,
+        }
+    }
+
+    /// How many references the BVH's leaves hold: one per primitive, more where triangles are
+    /// split, fewer where primitives are paired ([`Compact::Pairs`]).
+    pub fn references(&self) -> usize {
+        match &self.leaves {
+            Leaves::Direct => self.primitives.len(),
+            Leaves::Ranges(first) | Leaves::Copies { first, .. } => first.len() - 1,
         }
     }
 
@@ -457,20 +466,21 @@ impl Bvh {
             // SAFETY: the CPU has every feature `closest_hit_v3` is compiled for.
             return unsafe { self.closest_hit_v3(o, d, t_max) };
         }
-        self.closest_hit_in::<false>(o, d, t_max)
+        self.closest_hit_in(o, d, t_max)
     }
 
     /// [`Bvh::closest_hit`] compiled for x86-64-v3 (see [`cpu`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,bmi1,bmi2,fma,lzcnt,popcnt")]
     fn closest_hit_v3(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<Hit> {
-        self.closest_hit_in::<true>(o, d, t_max)
+        self.closest_hit_in(o, d, t_max)
     }
 
-    /// The query itself; `V3` only makes the v3 copy's traversal a separate instantiation, so
-    /// that it is inlined into (and compiled with the features of) `closest_hit_v3`.
+    /// The query itself, inlined into each copy; the traversal is expanded here (not called), so
+    /// it is compiled with the features of the copy it lands in. (The primitive tests stay out of
+    /// line, shared by both copies and compiled for baseline x86-64.)
     #[inline(always)]
-    fn closest_hit_in<const V3: bool>(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<Hit> {
+    fn closest_hit_in(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<Hit> {
         let mut best: Option<((f64, f64, f64), u32)> = None;
         let mut best_t = t_max;
         use glam::UVec2; // named by `traverse!`
@@ -513,19 +523,19 @@ impl Bvh {
             // SAFETY: the CPU has every feature `occluded_v3` is compiled for.
             return unsafe { self.occluded_v3(o, d, t_max) };
         }
-        self.occluded_in::<false>(o, d, t_max)
+        self.occluded_in(o, d, t_max)
     }
 
     /// [`Bvh::occluded`] compiled for x86-64-v3 (see [`cpu`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,bmi1,bmi2,fma,lzcnt,popcnt")]
     fn occluded_v3(&self, o: DVec3, d: DVec3, t_max: f64) -> bool {
-        self.occluded_in::<true>(o, d, t_max)
+        self.occluded_in(o, d, t_max)
     }
 
-    /// The query itself (`V3`: as for [`Bvh::closest_hit_in`]).
+    /// The query itself, inlined into each copy (as [`Bvh::closest_hit_in`]).
     #[inline(always)]
-    fn occluded_in<const V3: bool>(&self, o: DVec3, d: DVec3, t_max: f64) -> bool {
+    fn occluded_in(&self, o: DVec3, d: DVec3, t_max: f64) -> bool {
         use glam::UVec2; // named by `traverse!`
         let ray = Self::bvh_ray(o, d, t_max);
         let mut state = self.bvh.new_traversal(ray.direction);
@@ -590,7 +600,7 @@ mod tests {
     }
 
     /// The two-phase build (`topology`, then the primitives in its order) gives the same BVH as
-    /// the one-call build: same primitive order, same answers to the same rays.
+    /// the one-call build, compact or not: same primitive order, same answers to the same rays.
     #[test]
     fn two_phase_build_equals_one_call_build() {
         let mut rng = stream(6, 0);
@@ -618,28 +628,34 @@ mod tests {
                 }
             })
             .collect();
-        let one = Bvh::new(input.clone());
-        let topology = Bvh::topology(input.len(), Compact::No, |i, out| input[i].references(out));
-        let ordered = topology
-            .original()
-            .iter()
-            .map(|&i| input[i as usize])
-            .collect();
-        let two = Bvh::assemble(topology, ordered, Vec::new());
-        assert!(
-            matches!(one.leaves, Leaves::Copies { .. }),
-            "the test should exercise splits"
-        );
-        assert_eq!(one.original, two.original);
-        assert_eq!(one.primitives, two.primitives);
-        for _ in 0..2000 {
-            let o = DVec3::new(r(), r(), r()) * 6.0 - DVec3::ONE;
-            let d = (DVec3::new(r(), r(), r()) - DVec3::splat(0.5)).normalize();
-            assert_eq!(
-                one.closest_hit(o, d, f64::INFINITY),
-                two.closest_hit(o, d, f64::INFINITY)
-            );
-            assert_eq!(one.occluded(o, d, 2.0), two.occluded(o, d, 2.0));
+        // And a grid, whose quads pair under `Compact::Pairs`.
+        let mut input = input;
+        input.extend(grid(8, 4.0, &mut r));
+        for compact in [Compact::No, Compact::Pairs] {
+            let one = Bvh::with_options(input.clone(), Vec::new(), compact);
+            let topology = Bvh::topology(input.len(), compact, |i, out| input[i].references(out));
+            let ordered = topology
+                .original()
+                .iter()
+                .map(|&i| input[i as usize])
+                .collect();
+            let two = Bvh::assemble(topology, ordered, Vec::new());
+            let Leaves::Copies { first, .. } = &one.leaves else {
+                panic!("the test should exercise splits")
+            };
+            let pairs = (1..first.len()).filter(|&p| first[p] - first[p - 1] == 2);
+            assert_eq!(pairs.count() > 0, compact == Compact::Pairs, "{compact:?}");
+            assert_eq!(one.original, two.original);
+            assert_eq!(one.primitives, two.primitives);
+            for _ in 0..2000 {
+                let o = DVec3::new(r(), r(), r()) * 6.0 - DVec3::ONE;
+                let d = (DVec3::new(r(), r(), r()) - DVec3::splat(0.5)).normalize();
+                assert_eq!(
+                    one.closest_hit(o, d, f64::INFINITY),
+                    two.closest_hit(o, d, f64::INFINITY)
+                );
+                assert_eq!(one.occluded(o, d, 2.0), two.occluded(o, d, 2.0));
+            }
         }
     }
 
@@ -833,7 +849,8 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn v3_queries_equal_portable_queries() {
-        if !cpu::has_v3() {
+        if !cpu::cpu_has_v3() {
+            println!("skipped: this CPU lacks an x86-64-v3 feature");
             return;
         }
         let mut rng = stream(7, 0);
@@ -863,12 +880,12 @@ mod tests {
                 let o = DVec3::new(r(), r(), r()) * 12.0 - DVec3::splat(1.0);
                 let d = (DVec3::new(r(), r(), r()) - DVec3::splat(0.5)).normalize();
                 let t = 20.0 * r();
-                // SAFETY: `has_v3` said the CPU has the features.
+                // SAFETY: `cpu_has_v3` said the CPU has the features.
                 let (hit, blocked) =
                     unsafe { (bvh.closest_hit_v3(o, d, t), bvh.occluded_v3(o, d, t)) };
                 hits += hit.is_some() as usize;
-                assert_eq!(hit, bvh.closest_hit_in::<false>(o, d, t));
-                assert_eq!(blocked, bvh.occluded_in::<false>(o, d, t));
+                assert_eq!(hit, bvh.closest_hit_in(o, d, t));
+                assert_eq!(blocked, bvh.occluded_in(o, d, t));
             }
             assert!(hits > 300, "{hits} hits");
         }

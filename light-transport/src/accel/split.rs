@@ -13,7 +13,8 @@ const WASTE: f64 = 8.0;
 /// Largest number of halvings: at most `2^MAX_DEPTH` references per triangle.
 const MAX_DEPTH: u32 = 5;
 
-fn half_area(lo: DVec3, hi: DVec3) -> f64 {
+/// Half the surface area of the box `(lo, hi)` (zero for an empty one).
+pub(super) fn half_area(lo: DVec3, hi: DVec3) -> f64 {
     let e = (hi - lo).max(DVec3::ZERO);
     e.x * e.y + e.y * e.z + e.z * e.x
 }

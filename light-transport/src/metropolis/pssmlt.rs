@@ -145,6 +145,10 @@ pub fn mutate_primary<O: Observer<PrimaryState>>(
 impl Method for Pssmlt {
     type State = PrimaryState;
 
+    fn details(&self) -> Vec<String> {
+        crate::path::Roulette::report(self.bdpt.roulette)
+    }
+
     fn groups(&self) -> usize {
         1
     }

@@ -79,7 +79,26 @@ pub struct Roulette {
     pub camera: bool,
 }
 
+impl std::fmt::Display for Roulette {
+    /// For render reports: which walks may stop, from which vertex.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let walks = if self.camera {
+            "camera and light"
+        } else {
+            "light"
+        };
+        write!(f, "{walks} subpaths may stop from vertex {} on", self.from)
+    }
+}
+
 impl Roulette {
+    /// The report line of `roulette` (none when off), as BDPT and PSSMLT print it.
+    pub fn report(roulette: Option<Roulette>) -> Vec<String> {
+        roulette
+            .map(|r| vec![format!("roulette   {r}")])
+            .unwrap_or_default()
+    }
+
     /// The roulette of a camera walk under `roulette`.
     pub fn for_camera(roulette: Option<Roulette>) -> Option<Roulette> {
         roulette.filter(|r| r.camera)

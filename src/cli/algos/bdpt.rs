@@ -11,15 +11,16 @@ use light_transport::scene::Scene;
 /// Options of bidirectional path tracing (bdpt).
 #[derive(Args, Debug, Clone)]
 pub struct BdptArgs {
-    /// BDPT and PSSMLT: Russian roulette in both subpath walks from this vertex on (1 = the
+    /// BDPT and PSSMLT: Russian roulette in the subpath walks from this vertex on (1 = the
     /// first surface vertex; 0 = off, every walk runs to --max-depth).
     #[arg(long, default_value_t = 0)]
     pub roulette: usize,
-    /// Which walks --roulette stops: both, or light subpaths only (camera paths then keep the
-    /// densities their MIS weights assume; in 20 s renders of the built-ins it gave 0.81–0.95×
-    /// the error of no roulette, where roulette in both walks gave 0.67–1.35×).
-    #[arg(long, value_enum, default_value_t = RouletteWalks::Both)]
-    pub roulette_walks: RouletteWalks,
+    /// BDPT and PSSMLT: which walks --roulette stops (default both), or light subpaths only:
+    /// camera paths then keep the densities their MIS weights assume. In 20 s BDPT renders of
+    /// five built-in scenes, light only gave 0.81–0.95× the RMSE of no roulette, both walks
+    /// 0.65–1.38×; on veach-bidir both settings drew fireflies (README).
+    #[arg(long, value_enum)]
+    pub roulette_walks: Option<RouletteWalks>,
     /// BDPT and PT: Russian roulette on the shadow rays of contributions below this fraction
     /// of the image's mean luminance (estimated by a pilot of 4096 samples); 0 = off, every
     /// shadow ray is traced.
@@ -39,12 +40,12 @@ pub const ENTRY: Entry = Entry {
     unbiased: true,
     build: |scene, c, a| {
         let mut b = bdpt(c);
-        b.roulette = roulette(&a.bdpt);
+        b.roulette = roulette(&a.bdpt)?;
         b.shadow_roulette = shadow_roulette(&a.bdpt, scene, &b)?;
         Ok(Box::new(Passes {
             estimator: b,
             details: |b, _| {
-                let mut notes = roulette_note(b.roulette);
+                let mut notes = Roulette::report(b.roulette);
                 notes.extend(shadow_note(b.shadow_roulette));
                 notes
             },
@@ -92,22 +93,6 @@ pub fn shadow_note(r: Option<ShadowRoulette>) -> Vec<String> {
     .unwrap_or_default()
 }
 
-/// The report line of a roulette in the subpath walks.
-pub fn roulette_note(r: Option<Roulette>) -> Vec<String> {
-    r.map(|r| {
-        let walks = if r.camera {
-            "camera and light"
-        } else {
-            "light"
-        };
-        vec![format!(
-            "roulette   {walks} subpaths may stop from vertex {} on",
-            r.from
-        )]
-    })
-    .unwrap_or_default()
-}
-
 /// Which subpath walks `--roulette` stops.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum RouletteWalks {
@@ -118,11 +103,16 @@ pub enum RouletteWalks {
 }
 
 /// The roulette of `--roulette` and `--roulette-walks` (`None` for 0).
-pub fn roulette(a: &BdptArgs) -> Option<Roulette> {
-    (a.roulette > 0).then_some(Roulette {
+pub fn roulette(a: &BdptArgs) -> Result<Option<Roulette>, CliError> {
+    if a.roulette == 0 && a.roulette_walks.is_some() {
+        return Err(CliError::Usage(
+            "--roulette-walks needs --roulette N (the first vertex that may stop, N ≥ 1)".into(),
+        ));
+    }
+    Ok((a.roulette > 0).then_some(Roulette {
         from: a.roulette,
-        camera: a.roulette_walks == RouletteWalks::Both,
-    })
+        camera: a.roulette_walks != Some(RouletteWalks::Light),
+    }))
 }
 
 /// BDPT with the common options (also the evaluator of PSSMLT), without roulette.
