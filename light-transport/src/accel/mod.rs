@@ -798,9 +798,30 @@ mod tests {
         out
     }
 
+    /// `n` long slivers (split into several references each) alternating with `n` small spheres,
+    /// in `[0, 10]³`.
+    fn slivers_and_spheres(n: usize, r: &mut impl FnMut() -> f64) -> Vec<Primitive> {
+        let mut out = Vec::with_capacity(2 * n);
+        for _ in 0..n {
+            let c = DVec3::new(r(), r(), r()) * 10.0;
+            let d = DVec3::new(r(), r(), r()) - DVec3::splat(0.5);
+            out.push(Primitive::Triangle(Triangle {
+                p: [c, c + d * 8.0, c + d * 8.0 + DVec3::splat(0.2)],
+                uv: [[0.0; 2]; 3],
+                flip: false,
+                shading: NO_SHADING,
+            }));
+            out.push(Primitive::Sphere(Sphere {
+                center: DVec3::new(r(), r(), r()) * 10.0,
+                radius: 0.3 * r() + 0.01,
+                flip: false,
+            }));
+        }
+        out
+    }
+
     /// With `Compact::Pairs`, the two triangles of a quad share one reference (`PAIR`; without it
-    /// they do not), and the BVH still finds exactly
-    /// what brute force finds: on a grid alone (`Leaves::Ranges`) and on a grid with split
+    /// they do not), and the BVH still finds exactly what brute force finds: on a grid alone (`Leaves::Ranges`) and on a grid with split
     /// slivers and spheres (`Leaves::Copies`). Dropping a pair's second triangle fails both.
     #[test]
     fn paired_triangles_agree_with_brute_force() {
@@ -817,21 +838,7 @@ mod tests {
         agrees_on_random_rays(&prims, &bvh, 3000, &mut r, 12.0);
 
         let mut mixed = prims;
-        for _ in 0..40 {
-            let c = DVec3::new(r(), r(), r()) * 10.0;
-            let d = DVec3::new(r(), r(), r()) - DVec3::splat(0.5);
-            mixed.push(Primitive::Triangle(Triangle {
-                p: [c, c + d * 8.0, c + d * 8.0 + DVec3::splat(0.2)],
-                uv: [[0.0; 2]; 3],
-                flip: false,
-                shading: NO_SHADING,
-            }));
-            mixed.push(Primitive::Sphere(Sphere {
-                center: DVec3::new(r(), r(), r()) * 10.0,
-                radius: 0.3 * r() + 0.01,
-                flip: false,
-            }));
-        }
+        mixed.extend(slivers_and_spheres(40, &mut r));
         let bvh = Bvh::with_options(mixed.clone(), Vec::new(), Compact::Pairs);
         let Leaves::Copies { first, index, .. } = &bvh.leaves else {
             panic!("slivers are split: {:?}", bvh.leaves)
@@ -856,21 +863,7 @@ mod tests {
         let mut rng = stream(7, 0);
         let mut r = || uniform(&mut rng);
         let mut prims = grid(16, 10.0, &mut r);
-        for _ in 0..30 {
-            let c = DVec3::new(r(), r(), r()) * 10.0;
-            let d = DVec3::new(r(), r(), r()) - DVec3::splat(0.5);
-            prims.push(Primitive::Triangle(Triangle {
-                p: [c, c + d * 8.0, c + d * 8.0 + DVec3::splat(0.2)],
-                uv: [[0.0; 2]; 3],
-                flip: false,
-                shading: NO_SHADING,
-            }));
-            prims.push(Primitive::Sphere(Sphere {
-                center: DVec3::new(r(), r(), r()) * 10.0,
-                radius: 0.3 * r() + 0.01,
-                flip: false,
-            }));
-        }
+        prims.extend(slivers_and_spheres(30, &mut r));
         for bvh in [
             Bvh::new(prims.clone()),
             Bvh::with_options(prims.clone(), Vec::new(), Compact::Pairs),
