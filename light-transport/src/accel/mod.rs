@@ -466,21 +466,38 @@ impl Bvh {
             // SAFETY: the CPU has every feature `closest_hit_v3` is compiled for.
             return unsafe { self.closest_hit_v3(o, d, t_max) };
         }
-        self.closest_hit_in(o, d, t_max)
+        self.closest_hit_in::<false>(o, d, t_max)
     }
 
-    /// [`Bvh::closest_hit`] compiled for x86-64-v3 (see [`cpu`]).
+    /// [`Bvh::closest_hit`] compiled for x86-64-v3, with the AVX2 node test (see [`cpu`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,bmi1,bmi2,fma,lzcnt,popcnt")]
     fn closest_hit_v3(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<Hit> {
-        self.closest_hit_in(o, d, t_max)
+        self.closest_hit_in::<true>(o, d, t_max)
+    }
+
+    /// The ray against a node's children: obvhs's SSE test, or with `V3` the AVX2 one
+    /// ([`cpu::intersect_node_v3`]), which gives the same mask.
+    #[inline(always)]
+    fn node_hits<const V3: bool>(
+        node: &obvhs::cwbvh::node::CwBvhNode,
+        ray: &BvhRay,
+        oct_inv4: u32,
+    ) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        if V3 {
+            // SAFETY: `V3` is only set by the `_v3` queries, which run only when the CPU has
+            // their features (`cpu::has_v3`).
+            return unsafe { cpu::intersect_node_v3(node, ray, oct_inv4) };
+        }
+        node.intersect_ray(ray, oct_inv4)
     }
 
     /// The query itself, inlined into each copy; the traversal is expanded here (not called), so
     /// it is compiled with the features of the copy it lands in. (The primitive tests stay out of
     /// line, shared by both copies and compiled for baseline x86-64.)
     #[inline(always)]
-    fn closest_hit_in(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<Hit> {
+    fn closest_hit_in<const V3: bool>(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<Hit> {
         let mut best: Option<((f64, f64, f64), u32)> = None;
         let mut best_t = t_max;
         use glam::UVec2; // named by `traverse!`
@@ -493,7 +510,7 @@ impl Bvh {
             self.bvh,
             node,
             state,
-            node.intersect_ray(&ray, state.oct_inv4),
+            Self::node_hits::<V3>(node, &ray, state.oct_inv4),
             {
                 self.any_of_reference(state.primitive_id as usize, |primitive, index| {
                     if let Some(h) = primitive.intersect_t(o, d, best_t) {
@@ -523,19 +540,19 @@ impl Bvh {
             // SAFETY: the CPU has every feature `occluded_v3` is compiled for.
             return unsafe { self.occluded_v3(o, d, t_max) };
         }
-        self.occluded_in(o, d, t_max)
+        self.occluded_in::<false>(o, d, t_max)
     }
 
-    /// [`Bvh::occluded`] compiled for x86-64-v3 (see [`cpu`]).
+    /// [`Bvh::occluded`] compiled for x86-64-v3, with the AVX2 node test (see [`cpu`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,bmi1,bmi2,fma,lzcnt,popcnt")]
     fn occluded_v3(&self, o: DVec3, d: DVec3, t_max: f64) -> bool {
-        self.occluded_in(o, d, t_max)
+        self.occluded_in::<true>(o, d, t_max)
     }
 
     /// The query itself, inlined into each copy (as [`Bvh::closest_hit_in`]).
     #[inline(always)]
-    fn occluded_in(&self, o: DVec3, d: DVec3, t_max: f64) -> bool {
+    fn occluded_in<const V3: bool>(&self, o: DVec3, d: DVec3, t_max: f64) -> bool {
         use glam::UVec2; // named by `traverse!`
         let ray = Self::bvh_ray(o, d, t_max);
         let mut state = self.bvh.new_traversal(ray.direction);
@@ -547,7 +564,7 @@ impl Bvh {
                 self.bvh,
                 node,
                 state,
-                node.intersect_ray(&ray, state.oct_inv4),
+                Self::node_hits::<V3>(node, &ray, state.oct_inv4),
                 {
                     if self
                         .any_of_reference(state.primitive_id as usize, |p, _| p.hits(o, d, t_max))
@@ -877,10 +894,54 @@ mod tests {
                 let (hit, blocked) =
                     unsafe { (bvh.closest_hit_v3(o, d, t), bvh.occluded_v3(o, d, t)) };
                 hits += hit.is_some() as usize;
-                assert_eq!(hit, bvh.closest_hit_in(o, d, t));
-                assert_eq!(blocked, bvh.occluded_in(o, d, t));
+                assert_eq!(hit, bvh.closest_hit_in::<false>(o, d, t));
+                assert_eq!(blocked, bvh.occluded_in::<false>(o, d, t));
             }
             assert!(hits > 300, "{hits} hits");
         }
+    }
+
+    /// The AVX2 node test (`cpu::intersect_node_v3`) returns obvhs's hit mask bit for bit, for
+    /// every node of a BVH and rays of every octant, including axis-parallel directions (infinite
+    /// inverse components, whose NaN products the operand order decides), negative zeros, origins
+    /// inside the boxes, and short and infinite `tmax`. (Skipped on CPUs without v3.)
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn node_test_matches_obvhs() {
+        if !cpu::cpu_has_v3() {
+            println!("skipped: this CPU lacks an x86-64-v3 feature");
+            return;
+        }
+        let mut rng = stream(8, 0);
+        let mut r = || uniform(&mut rng);
+        let mut prims = grid(12, 10.0, &mut r);
+        prims.extend(slivers_and_spheres(30, &mut r));
+        let bvh = Bvh::new(prims);
+        let nodes = &bvh.bvh.nodes;
+        assert!(nodes.len() > 20, "{} nodes", nodes.len());
+        let (mut rays, mut hit_bits) = (0, 0u64);
+        for k in 0..4000 {
+            let o = DVec3::new(r(), r(), r()) * 12.0 - DVec3::splat(1.0);
+            let mut d = DVec3::new(r(), r(), r()) - DVec3::splat(0.5);
+            // Zero components (either sign), one or two at a time.
+            for (axis, sign) in [(k % 3, k % 5), ((k + 1) % 3, k % 7)].into_iter().take(k % 3) {
+                d[axis] = if sign % 2 == 0 { 0.0 } else { -0.0 };
+            }
+            if d == DVec3::ZERO {
+                continue;
+            }
+            let t = [0.5, 5.0, 30.0, f64::INFINITY][k % 4];
+            let ray = BvhRay::new(to_f32(o), to_f32(d.normalize()), 0.0, t as f32);
+            let oct_inv4 = bvh.bvh.new_traversal(ray.direction).oct_inv4;
+            for node in nodes {
+                let expected = node.intersect_ray(&ray, oct_inv4);
+                // SAFETY: `cpu_has_v3` said the CPU has the features.
+                let got = unsafe { cpu::intersect_node_v3(node, &ray, oct_inv4) };
+                assert_eq!(got, expected, "ray {ray:?}, node {node:?}");
+                hit_bits += expected.count_ones() as u64;
+            }
+            rays += 1;
+        }
+        assert!(rays > 3000 && hit_bits > 5000, "{rays} rays, {hit_bits} bits");
     }
 }
