@@ -86,41 +86,83 @@ pub fn connect_unoccluded(
         return None;
     }
     let pt = &camera[t - 1];
-    if s == 0 {
-        // The camera subpath reached an emitter.
-        if t < 2 {
-            return None;
+    fn end(v: &Vertex) -> End<'_> {
+        End {
+            vertex: v,
+            beta: v.beta,
+            pdf_fwd: v.pdf_fwd,
         }
-        let le = pt.le(scene, &camera[t - 2]);
+    }
+    let qs = s.checked_sub(1).map(|i| &light[i]);
+    join(
+        scene,
+        qs.map(end),
+        end(pt),
+        t.checked_sub(2).map(|i| &camera[i]),
+        || qs.map_or(Rgb::BLACK, |q| q.f(scene, pt, TransportMode::Importance)),
+        || qs.map_or(Rgb::BLACK, |q| pt.f(scene, q, TransportMode::Radiance)),
+    )
+}
+
+/// One end of a connection: the last vertex of a subpath prefix, with the walk's throughput and
+/// forward density there (which need not be the ones stored in the vertex: see
+/// [`crate::pathspace::FullPath::strategies`]).
+#[derive(Clone, Copy, Debug)]
+pub struct End<'a> {
+    /// The vertex.
+    pub vertex: &'a Vertex,
+    /// Throughput of the prefix up to it over its density.
+    pub beta: Rgb,
+    /// Its forward density (for the lens point: the lens density).
+    pub pdf_fwd: f64,
+}
+
+/// The connection of a light prefix ending at `light` (`None`: `s = 0`) with a camera prefix
+/// ending at `camera`, whose previous vertex is `before_camera` (`None`: `t = 1`, the lens
+/// point). `f_light` gives the light end's factor toward the camera end (importance), `f_camera`
+/// the camera end's toward the light end (radiance), each as [`Vertex::f`]; they are called only
+/// for strategies that need them. No visibility test.
+pub fn join(
+    scene: &Scene,
+    light: Option<End<'_>>,
+    camera: End<'_>,
+    before_camera: Option<&Vertex>,
+    f_light: impl FnOnce() -> Rgb,
+    f_camera: impl FnOnce() -> Rgb,
+) -> Option<Connection> {
+    let pt = camera.vertex;
+    let Some(q) = light else {
+        // The camera subpath reached an emitter.
+        let le = pt.le(scene, before_camera?);
         if le.is_black() {
             return None;
         }
         return Some(Connection {
-            value: le * pt.beta,
+            value: le * camera.beta,
             raster: None,
         });
-    }
-    let qs = &light[s - 1];
+    };
+    let qs = q.vertex;
     if !qs.connectible() || !pt.connectible() {
         return None;
     }
-    let fq = if s == 1 {
+    let fq = if matches!(qs.kind, VertexKind::Light { .. }) {
         qs.le(scene, pt)
     } else {
-        qs.f(scene, pt, TransportMode::Importance)
+        f_light()
     };
-    if t == 1 {
+    if before_camera.is_none() {
         let w = (qs.p() - pt.p()).normalize_or_zero();
         let (we, _, raster) = scene.camera.importance(pt.p(), w);
         let raster = raster?;
-        let value = qs.beta * fq * (we * geometry(scene, qs, pt) / pt.pdf_fwd);
+        let value = q.beta * fq * (we * geometry(scene, qs, pt) / camera.pdf_fwd);
         return (!value.is_black()).then_some(Connection {
             value,
             raster: Some(raster),
         });
     }
-    let fp = pt.f(scene, qs, TransportMode::Radiance);
-    let value = qs.beta * fq * fp * pt.beta * geometry(scene, qs, pt);
+    let fp = f_camera();
+    let value = q.beta * fq * fp * camera.beta * geometry(scene, qs, pt);
     (!value.is_black()).then_some(Connection {
         value,
         raster: None,

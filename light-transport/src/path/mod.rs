@@ -8,7 +8,9 @@ mod mis;
 mod vertex;
 mod walk;
 
-pub use connect::{Connection, GRAZING_COSINE, connect, connect_unoccluded, geometry, unoccluded};
+pub use connect::{
+    Connection, End, GRAZING_COSINE, connect, connect_unoccluded, geometry, join, unoccluded,
+};
 pub use mis::{MisHeuristic, mis_weight};
 pub use vertex::{Vertex, VertexKind};
 pub use walk::{
