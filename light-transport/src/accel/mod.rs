@@ -924,7 +924,10 @@ mod tests {
             let o = DVec3::new(r(), r(), r()) * 12.0 - DVec3::splat(1.0);
             let mut d = DVec3::new(r(), r(), r()) - DVec3::splat(0.5);
             // Zero components (either sign), one or two at a time.
-            for (axis, sign) in [(k % 3, k % 5), ((k + 1) % 3, k % 7)].into_iter().take(k % 3) {
+            for (axis, sign) in [(k % 3, k % 5), ((k + 1) % 3, k % 7)]
+                .into_iter()
+                .take(k % 3)
+            {
                 d[axis] = if sign % 2 == 0 { 0.0 } else { -0.0 };
             }
             if d == DVec3::ZERO {
@@ -942,6 +945,9 @@ mod tests {
             }
             rays += 1;
         }
-        assert!(rays > 3000 && hit_bits > 5000, "{rays} rays, {hit_bits} bits");
+        assert!(
+            rays > 3000 && hit_bits > 5000,
+            "{rays} rays, {hit_bits} bits"
+        );
     }
 }

@@ -160,8 +160,21 @@ impl FullPath {
         let v = &self.vertices;
         // The light side's prefixes end at `v_{k−1}` at the latest; its walk goes on to `v_k` only
         // for the factor of `v_{k−1}` toward the lens point.
-        let lv = walk(scene, n, |i| &v[i], TransportMode::Importance, &mut scratch.light).min(k);
-        let cv = walk(scene, n, |j| &v[k - j], TransportMode::Radiance, &mut scratch.camera);
+        let lv = walk(
+            scene,
+            n,
+            |i| &v[i],
+            TransportMode::Importance,
+            &mut scratch.light,
+        )
+        .min(k);
+        let cv = walk(
+            scene,
+            n,
+            |j| &v[k - j],
+            TransportMode::Radiance,
+            &mut scratch.camera,
+        );
         let (light, camera) = (&scratch.light, &scratch.camera);
         let end = |vertex, t: &Traced| End {
             vertex,
@@ -252,10 +265,7 @@ pub fn walk<'a>(
             } else {
                 start.n().dot(w01).abs()
             };
-            (
-                start.le(scene, next) * (cos / (out[0].pdf_fwd * pdf)),
-                pdf,
-            )
+            (start.le(scene, next) * (cos / (out[0].pdf_fwd * pdf)), pdf)
         }
         _ => {
             let (we, pdf, _) = scene.camera.importance(start.p(), w01);
@@ -377,7 +387,10 @@ mod tests {
                 nonzero += out.iter().flatten().count();
                 specular += (1..k).any(|i| path.specular(i)) as usize;
             }
-            assert!(paths == 400 && nonzero > 400, "{name}: {paths} paths, {nonzero} values");
+            assert!(
+                paths == 400 && nonzero > 400,
+                "{name}: {paths} paths, {nonzero} values"
+            );
             println!("{name}: {paths} paths, {nonzero} nonzero C*_s, {specular} specular");
         }
     }
