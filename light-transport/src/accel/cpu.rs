@@ -39,7 +39,8 @@ pub fn cpu_has_v3() -> bool {
 /// from a byte to a float by one vector instruction for all eight children, where obvhs converts
 /// them one at a time, and without the branch per child. Returns the same hit mask, bit for bit:
 /// the same products and sums in the same order (no fused multiply-add), the same `max`/`min`
-/// operand order (which decides the result for a NaN) and the same ordered `≤`.
+/// operand order (which would decide the result for a NaN, should a product ever overflow) and
+/// the same ordered `≤`.
 ///
 /// The mask's high byte holds the hit inner children, shifted by their traversal priority; its
 /// low 24 bits the unary-coded primitive counts of the hit leaves (Ylitie et al. 2017, §3).

@@ -902,9 +902,10 @@ mod tests {
     }
 
     /// The AVX2 node test (`cpu::intersect_node_v3`) returns obvhs's hit mask bit for bit, for
-    /// every node of a BVH and rays of every octant, including axis-parallel directions (infinite
-    /// inverse components, whose NaN products the operand order decides), negative zeros, origins
-    /// inside the boxes, and short and infinite `tmax`. (Skipped on CPUs without v3.)
+    /// every node of a BVH and rays of every octant, axis-parallel ones (zero components of either
+    /// sign, which obvhs's safe inverse turns into large finite ones), origins inside the boxes,
+    /// and `tmax` from below obvhs's minimum entry distance (so a changed `OBVHS_EPSILON` fails) to
+    /// infinite. (Skipped on CPUs without v3.)
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn node_test_matches_obvhs() {
@@ -933,7 +934,7 @@ mod tests {
             if d == DVec3::ZERO {
                 continue;
             }
-            let t = [0.5, 5.0, 30.0, f64::INFINITY][k % 4];
+            let t = [5e-5, 0.5, 5.0, 30.0, f64::INFINITY][k % 5];
             let ray = BvhRay::new(to_f32(o), to_f32(d.normalize()), 0.0, t as f32);
             let oct_inv4 = bvh.bvh.new_traversal(ray.direction).oct_inv4;
             for node in nodes {
