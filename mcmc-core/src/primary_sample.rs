@@ -26,6 +26,9 @@ struct Stream {
     modified: Vec<u64>,
 }
 
+/// Coordinates a stream makes room for when its first one is read.
+const FIRST_CAPACITY: usize = 32;
+
 /// A point of primary sample space with lazily created coordinates in several streams.
 #[derive(Clone, Debug)]
 pub struct PrimarySample {
@@ -92,6 +95,11 @@ impl PrimarySample {
             return 0.5; // out-of-range stream: callers are expected to stay within stream_count
         };
         if index >= st.values.len() {
+            // Coordinates arrive one at a time: room for a path's worth at once spares the
+            // vectors their doubling reallocations (a state is made per independent sample).
+            let wanted = (index + 1).max(FIRST_CAPACITY);
+            st.values.reserve(wanted - st.values.len());
+            st.modified.reserve(wanted - st.modified.len());
             st.values.resize(index + 1, 0.0);
             // A coordinate that never existed is "older than any large step".
             st.modified.resize(index + 1, u64::MAX);
