@@ -289,7 +289,7 @@ mod tests {
             splats: &mut Vec<Splat>,
         ) -> Rgb {
             let u = uniform(&mut stream.rng);
-            if pixel % 97 == 0 {
+            if pixel.is_multiple_of(97) {
                 std::thread::sleep(Duration::from_micros(50 * (pixel % 7) as u64));
             }
             let v = match pixel % 3 {
