@@ -207,15 +207,20 @@ impl FullPath {
 /// walks of [`crate::path`] would. Returns how many leading vertices are valid (a zero density
 /// cuts the subpath there); only those are written.
 pub fn retrace(scene: &Scene, sub: &mut [Vertex], mode: TransportMode) -> usize {
-    let mut traced = Vec::new();
-    let valid = walk(scene, sub.len(), |i| &sub[i], mode, &mut traced);
-    for (v, t) in sub.iter_mut().zip(&traced[..valid]) {
-        v.wo = t.wo;
-        v.beta = t.beta;
-        v.pdf_fwd = t.pdf_fwd;
-        v.pdf_rev = 0.0;
+    thread_local! {
+        // The walk's records, kept per thread (manifold and photon moves retrace per proposal).
+        static TRACED: std::cell::RefCell<Vec<Traced>> = const { std::cell::RefCell::new(Vec::new()) };
     }
-    valid
+    TRACED.with_borrow_mut(|traced| {
+        let valid = walk(scene, sub.len(), |i| &sub[i], mode, traced);
+        for (v, t) in sub.iter_mut().zip(&traced[..valid]) {
+            v.wo = t.wo;
+            v.beta = t.beta;
+            v.pdf_fwd = t.pdf_fwd;
+            v.pdf_rev = 0.0;
+        }
+        valid
+    })
 }
 
 /// The walk of [`retrace`] over the `n` vertices `at(0) … at(n − 1)`, from `at(0)`, without
