@@ -868,19 +868,35 @@ mod tests {
         agrees_on_random_rays(&mixed, &bvh, 3000, &mut r, 12.0);
     }
 
+    /// Whether the CPU has the x86-64-v3 features (a v3 test prints that it is skipped if not).
+    #[cfg(target_arch = "x86_64")]
+    fn v3_or_skip() -> bool {
+        let has = cpu::cpu_has_v3();
+        if !has {
+            println!("skipped: this CPU lacks an x86-64-v3 feature");
+        }
+        has
+    }
+
+    /// An `n × n` grid over 10 units, with split slivers and spheres among its cells.
+    #[cfg(target_arch = "x86_64")]
+    fn grid_slivers_and_spheres(n: usize, r: &mut impl FnMut() -> f64) -> Vec<Primitive> {
+        let mut prims = grid(n, 10.0, r);
+        prims.extend(slivers_and_spheres(30, r));
+        prims
+    }
+
     /// The x86-64-v3 copies of the ray queries (`cpu`) answer exactly as the portable ones, hit
     /// for hit, on a scene with pairs, split slivers and spheres. (Skipped on CPUs without v3.)
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn v3_queries_equal_portable_queries() {
-        if !cpu::cpu_has_v3() {
-            println!("skipped: this CPU lacks an x86-64-v3 feature");
+        if !v3_or_skip() {
             return;
         }
         let mut rng = stream(7, 0);
         let mut r = || uniform(&mut rng);
-        let mut prims = grid(16, 10.0, &mut r);
-        prims.extend(slivers_and_spheres(30, &mut r));
+        let prims = grid_slivers_and_spheres(16, &mut r);
         for bvh in [
             Bvh::new(prims.clone()),
             Bvh::with_options(prims.clone(), Vec::new(), Compact::Pairs),
@@ -909,14 +925,12 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn node_test_matches_obvhs() {
-        if !cpu::cpu_has_v3() {
-            println!("skipped: this CPU lacks an x86-64-v3 feature");
+        if !v3_or_skip() {
             return;
         }
         let mut rng = stream(8, 0);
         let mut r = || uniform(&mut rng);
-        let mut prims = grid(12, 10.0, &mut r);
-        prims.extend(slivers_and_spheres(30, &mut r));
+        let prims = grid_slivers_and_spheres(12, &mut r);
         let bvh = Bvh::new(prims);
         let nodes = &bvh.bvh.nodes;
         assert!(nodes.len() > 20, "{} nodes", nodes.len());
