@@ -7,8 +7,9 @@
 use crate::Result;
 use crate::budget::Budget;
 use crate::film::Film;
-use crate::integrators::{Estimator, render};
+use crate::integrators::{Estimator, Sampling, render};
 use crate::metropolis::{Method, MetropolisSettings, MetropolisStats, run_with};
+use crate::sampler::PixelSampler;
 use crate::scene::Scene;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -81,14 +82,17 @@ pub struct Passes<E> {
     pub estimator: E,
     /// Extra report lines after the render (e.g. ERPT's statistics).
     pub details: fn(&E, f64) -> Vec<String>,
+    /// How its samples draw their numbers.
+    pub sampler: PixelSampler,
 }
 
 impl<E> Passes<E> {
-    /// The estimator, with no extra report.
+    /// The estimator with the default sampler and no extra report.
     pub fn new(estimator: E) -> Self {
         Self {
             estimator,
             details: |_, _| Vec::new(),
+            sampler: PixelSampler::default(),
         }
     }
 }
@@ -103,7 +107,11 @@ impl<E: Estimator> Renderer for Passes<E> {
     ) -> Result<(Film, Report)> {
         budget.validate()?;
         let mut interrupted = false;
-        let (film, stats) = render(scene, &self.estimator, budget, seed, |film, p| {
+        let sampling = Sampling {
+            seed,
+            sampler: self.sampler,
+        };
+        let (film, stats) = render(scene, &self.estimator, budget, sampling, |film, p| {
             let progress = Progress {
                 samples_per_pixel: p.passes as f64,
                 elapsed: p.elapsed,
@@ -123,7 +131,11 @@ impl<E: Estimator> Renderer for Passes<E> {
                 elapsed: stats.elapsed,
                 discarded: stats.discarded,
                 interrupted,
-                details: (self.details)(&self.estimator, pixels),
+                details: {
+                    let mut d = vec![format!("sampler    {}", self.sampler)];
+                    d.extend((self.details)(&self.estimator, pixels));
+                    d
+                },
                 metropolis: None,
             },
         ))

@@ -33,7 +33,7 @@ use light_transport::pathspace::erpt::seed_paths;
 use light_transport::pathspace::{
     Erpt, ErptSettings, MutationProbabilities, Mutations, NewPath, PathMlt, PathState,
 };
-use light_transport::sampler::IndependentStream;
+use light_transport::sampler::PixelStream;
 use light_transport::scene::{Scene, builtin};
 use light_transport::spectrum::Rgb;
 use mcmc_core::kernel::Observer;
@@ -369,7 +369,7 @@ impl Estimator for ErptWithoutMis {
         &self,
         scene: &Scene,
         pixel: usize,
-        stream: &mut IndependentStream,
+        stream: &mut PixelStream,
         splats: &mut Vec<Splat>,
     ) -> Rgb {
         let m = &self.0.settings.mutations;

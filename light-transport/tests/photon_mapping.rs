@@ -1,13 +1,20 @@
 //! Standard photon mapping (Jensen 2001) approaches BDPT as the photon count grows: on the Cornell
 //! box (glass and mirror spheres: caustics through the caustic map, indirect light through the
 //! global map), the relative RMS difference of 6×6-pixel block means from the BDPT reference of
-//! the convergence tests (128 samples per pixel over 16 batches) falls at each of four photon
-//! counts, each 4× the last, and the image means agree to 2% at the last: 3.90%, 3.17%, 3.13%,
-//! 2.70% for 250 … 16 000 light paths per map, image mean ratios 0.985, 0.996, 0.997, 0.997. At
-//! these counts the maps are sparse and their maximum radii sit at the density rule's caps
-//! (`photon::radius`); uncapped, the rule gave 5.02%, 3.96%, 3.33%, 2.85% with means from 0.948
-//! (the large radii of small maps blur). Beyond ~16 000 paths the comparison's own noise (the
-//! reference's and the render's, ≈ 2.6%) dominates. Fixed seeds: deterministic.
+//! the convergence tests (128 samples per pixel over 16 batches) falls with every 16× more photons
+//! (from 250 to 4 000 and from 1 000 to 16 000 light paths per map), and the image means agree to
+//! 2% at the last count: 3.29%, 3.36%, 2.74%, 2.52%, image mean ratio 1.0145 at the last.
+//!
+//! The renders take 64 samples per pixel with the default (Sobol) sampler. PM's block means are
+//! heavy-tailed (a final-gather ray that finds the light through the glass sphere lifts a block by
+//! 15–37%), so a render's error says little at fewer samples: over 12 seeds, this test at the 16
+//! samples per pixel and independent numbers it used to take would have failed for 8, with errors
+//! of 3.9–16% (it passed at its one seed), and the error falls from each count to the next only
+//! within that noise. With Sobol numbers at 64 samples per pixel, the errors over the same 12 seeds
+//! are 2.7–3.4% at 250 paths and 1.2–2.5% at 16 000; every 16× step lowers them for all 12 (4× steps
+//! not always: the maximum radii sit at the density rule's caps at these counts, `photon::radius`,
+//! so the blur is the same and only the maps' noise falls); the image mean ratios are 1.006–1.017
+//! (PM's blur: 1.012 ± 0.003). Fixed seeds: deterministic.
 
 mod common;
 
@@ -40,7 +47,7 @@ fn photon_mapping_approaches_bdpt_as_photons_grow() {
             ..PhotonMapping::new(MAX_EDGES)
         };
         let pm = PhotonMapper::new(&scene, settings).expect("photon maps");
-        let film = render(&scene, &pm, Budget::SamplesPerPixel(16.0), 7, |_, _| true).0;
+        let film = render(&scene, &pm, Budget::SamplesPerPixel(64.0), 7, |_, _| true).0;
         let b = blocks(&Image::from_film(&film));
         let e = rel_rms(&b, &reference);
         let ratio = b.iter().sum::<f64>() / reference.iter().sum::<f64>();
@@ -51,8 +58,8 @@ fn photon_mapping_approaches_bdpt_as_photons_grow() {
         last_ratio = ratio;
     }
     assert!(
-        errors.windows(2).all(|w| w[1] < w[0]),
-        "the error does not fall with the photon count: {errors:?}"
+        errors[2] < errors[0] && errors[3] < errors[1],
+        "the error does not fall with 16× the photons: {errors:?}"
     );
     // No bias beyond the comparison's noise: the image means agree to 2%.
     assert!(

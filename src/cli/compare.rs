@@ -127,7 +127,7 @@ fn track(
     reference: &Image,
     rows: &mut Vec<Row>,
 ) -> Result<(Image, bool), CliError> {
-    let renderer = (entry.build)(scene, &a.options.common(), &a.algo_options)?;
+    let renderer = registry::build(entry, scene, &a.options.common(), &a.algo_options)?;
     let mut cp = Checkpoints::new(a, entry.name, reference, rows);
     let (film, report) = run_renderer(
         scene,

@@ -4,6 +4,7 @@ use super::registry::Common;
 use clap::ValueEnum;
 use light_transport::accel::Compact;
 use light_transport::path::MisHeuristic;
+use light_transport::sampler::PixelSampler;
 
 /// Options every rendering command shares.
 #[derive(clap::Args, Debug, Clone)]
@@ -28,6 +29,12 @@ pub struct RenderOptions {
     /// 0.90–0.97× the rays per second. Images are the same.
     #[arg(long)]
     pub compact_bvh: bool,
+    /// How the pass-based algorithms (pt, lt, bdpt, erpt, mept, pm, mps) draw a sample's
+    /// numbers: an Owen-scrambled Sobol sequence per pixel, one point per pass (default), or
+    /// independent numbers. Both are unbiased; at equal samples Sobol gave BDPT 0.37–0.84× the
+    /// MSE of independent numbers on our scenes (README).
+    #[arg(long, value_enum)]
+    pub sampler: Option<Sampler>,
 }
 
 impl RenderOptions {
@@ -41,6 +48,7 @@ impl RenderOptions {
         Common {
             max_edges: self.max_depth + 1,
             heuristic: self.mis.into(),
+            sampler: self.sampler.map(Into::into),
         }
     }
 }
@@ -64,6 +72,24 @@ impl From<Heuristic> for MisHeuristic {
         match h {
             Heuristic::Balance => MisHeuristic::Balance,
             Heuristic::Power => MisHeuristic::Power,
+        }
+    }
+}
+
+/// Sampler option of the pass-based algorithms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Sampler {
+    /// An Owen-scrambled Sobol sequence per pixel.
+    Sobol,
+    /// Independent numbers.
+    Independent,
+}
+
+impl From<Sampler> for PixelSampler {
+    fn from(s: Sampler) -> Self {
+        match s {
+            Sampler::Sobol => PixelSampler::Sobol,
+            Sampler::Independent => PixelSampler::Independent,
         }
     }
 }

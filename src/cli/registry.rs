@@ -11,6 +11,7 @@ use clap::Args;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use light_transport::path::MisHeuristic;
 use light_transport::renderer::Renderer;
+use light_transport::sampler::PixelSampler;
 use light_transport::scene::Scene;
 
 /// How an algorithm is built on a scene from the options.
@@ -24,6 +25,8 @@ pub struct Entry {
     pub about: &'static str,
     /// Whether it is an unbiased estimator (usable for references).
     pub unbiased: bool,
+    /// Whether it runs in passes of one sample per pixel (and so takes `--sampler`).
+    pub passes: bool,
     /// Build it on a scene from the options.
     pub build: Build,
 }
@@ -72,6 +75,37 @@ pub struct Common {
     pub max_edges: usize,
     /// MIS heuristic.
     pub heuristic: MisHeuristic,
+    /// The sampler asked for (pass-based algorithms only; `None`: their default).
+    pub sampler: Option<PixelSampler>,
+}
+
+impl Common {
+    /// The sampler of a pass-based algorithm.
+    pub fn pass_sampler(&self) -> PixelSampler {
+        self.sampler.unwrap_or_default()
+    }
+}
+
+/// Build `entry` on `scene`: its own constructor, after refusing options it does not take.
+pub fn build(
+    entry: &Entry,
+    scene: &Scene,
+    common: &Common,
+    args: &AlgoArgs,
+) -> Result<Box<dyn Renderer>, CliError> {
+    if common.sampler.is_some() && !entry.passes {
+        let passes: Vec<&str> = ALGORITHMS
+            .iter()
+            .filter(|e| e.passes)
+            .map(|e| e.name)
+            .collect();
+        return Err(CliError::Usage(format!(
+            "--sampler applies to the algorithms that render in passes ({}), not to {}",
+            passes.join(", "),
+            entry.name
+        )));
+    }
+    (entry.build)(scene, common, args)
 }
 
 /// The option groups of the algorithms (each algorithm reads the ones it uses).

@@ -97,7 +97,7 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
         eprintln!("note: {note}");
     }
     let (exr, png) = output_paths(&a.output, &loaded.name, a.algo.name);
-    let renderer = (a.algo.build)(&scene, &a.options.common(), &a.algos)?;
+    let renderer = registry::build(a.algo, &scene, &a.options.common(), &a.algos)?;
     let mut last_write = Instant::now();
     let every = |film: &Film, _: &light_transport::renderer::Progress| {
         if last_write.elapsed() >= a.write_every {

@@ -14,7 +14,7 @@ use crate::path::{
     MisHeuristic, Roulette, Vertex, WalkSettings, camera_subpath_with, connect_unoccluded,
     light_subpath_with, mis_weight, unoccluded,
 };
-use crate::sampler::{IndependentStream, SampleStream};
+use crate::sampler::{PixelStream, SampleStream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use mcmc_core::rng::ChainRng;
@@ -124,7 +124,7 @@ impl Estimator for Bdpt {
         &self,
         scene: &Scene,
         pixel: usize,
-        stream: &mut IndependentStream,
+        stream: &mut PixelStream,
         splats: &mut Vec<Splat>,
     ) -> Rgb {
         SUBPATHS.with(|b| {

@@ -4,7 +4,7 @@
 
 use super::{Estimator, Splat};
 use crate::path::{Vertex, WalkSettings, camera_subpath, connect, light_subpath};
-use crate::sampler::IndependentStream;
+use crate::sampler::PixelStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use std::cell::RefCell;
@@ -25,7 +25,7 @@ impl Estimator for LightTracer {
         &self,
         scene: &Scene,
         _pixel: usize,
-        stream: &mut IndependentStream,
+        stream: &mut PixelStream,
         splats: &mut Vec<Splat>,
     ) -> Rgb {
         SUBPATHS.with(|b| {

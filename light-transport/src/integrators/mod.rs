@@ -6,6 +6,10 @@
 //! every sample draws from its own stream (`seed`, pass, pixel), and chunk results are merged in
 //! chunk order, so images are bit-identical whatever the number of threads.
 //!
+//! Every sample draws its numbers from a [`PixelStream`]: independent numbers, or the pixel's
+//! Owen-scrambled Sobol point of the pass ([`PixelSampler::Sobol`], the default), whose strata
+//! lower the variance of pixel estimates where the integrand is smooth (measured in the README).
+//!
 //! Time budgets end with a *fractional pass* instead of overshooting by up to a whole pass: when
 //! the time left is a fraction `q < 1` of the last pass's duration, every pixel takes part in the
 //! last pass independently with probability `q` (its own stream decides), and the splats of that
@@ -28,7 +32,7 @@ pub use crate::budget::Budget;
 pub use crate::film::Splat;
 
 use crate::film::Film;
-use crate::sampler::IndependentStream;
+use crate::sampler::{PixelSampler, PixelStream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use mcmc_core::rng::uniform;
@@ -42,7 +46,7 @@ pub trait Estimator: Sync {
         &self,
         scene: &Scene,
         pixel: usize,
-        stream: &mut IndependentStream,
+        stream: &mut PixelStream,
         splats: &mut Vec<Splat>,
     ) -> Rgb;
     /// Whether `sample`'s return value is a pixel estimate (false for light tracing, which only
@@ -85,6 +89,25 @@ pub struct RenderStats {
     pub discarded: u64,
 }
 
+/// Where a render's numbers come from: its master seed and how a sample draws them. A bare seed
+/// converts into the default sampler ([`PixelSampler::Sobol`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Sampling {
+    /// Master seed.
+    pub seed: u64,
+    /// How a sample draws its numbers.
+    pub sampler: PixelSampler,
+}
+
+impl From<u64> for Sampling {
+    fn from(seed: u64) -> Self {
+        Self {
+            seed,
+            sampler: PixelSampler::default(),
+        }
+    }
+}
+
 const CHUNKS: usize = 64;
 
 /// What a chunk of a pass produces: pixel estimates, splats, rays traced.
@@ -92,15 +115,17 @@ type ChunkResult = (Vec<(usize, Rgb)>, Vec<Splat>, u64);
 const PASS_PURPOSE: u64 = 0x5eed_0001;
 const FRACTION_PURPOSE: u64 = 0x5eed_0002;
 
-/// Render `estimator` into a film within `budget`; `progress` is called after every pass and may
-/// stop the render early by returning `false`.
+/// Render `estimator` into a film within `budget`, its numbers drawn as `sampling` says (a seed,
+/// or a seed and a [`PixelSampler`]); `progress` is called after every pass and may stop the
+/// render early by returning `false`.
 pub fn render<E: Estimator>(
     scene: &Scene,
     estimator: &E,
     budget: Budget,
-    seed: u64,
+    sampling: impl Into<Sampling>,
     mut progress: impl FnMut(&Film, Progress) -> bool,
 ) -> (Film, RenderStats) {
+    let sampling = sampling.into();
     let mut film = Film::new(scene.camera.width, scene.camera.height);
     let start = Instant::now();
     let mut stats = RenderStats::default();
@@ -124,7 +149,7 @@ pub fn render<E: Estimator>(
         let taken = pass(
             scene,
             estimator,
-            seed,
+            sampling,
             stats.passes,
             q,
             &mut film,
@@ -159,7 +184,8 @@ pub fn render<E: Estimator>(
 
 /// One pass of `estimator` into `film`: every pixel with probability `q` (all of them when
 /// `q ≥ 1`), its splats counted as `q` of a pass (see the module docs). Returns the samples taken
-/// and adds the rays traced to `rays`. Deterministic in `(seed, pass)`, whatever the thread count.
+/// and adds the rays traced to `rays`. Deterministic in `(sampling, pass)`, whatever the thread
+/// count.
 ///
 /// The pass is cut into [`CHUNKS`] runs of pixels, handed to the threads in order; each chunk's
 /// estimates and splats enter the film in chunk order (so the film's sums do not depend on the
@@ -169,7 +195,7 @@ pub fn render<E: Estimator>(
 pub fn pass<E: Estimator>(
     scene: &Scene,
     estimator: &E,
-    seed: u64,
+    sampling: impl Into<Sampling>,
     pass: u64,
     q: f64,
     film: &mut Film,
@@ -178,6 +204,7 @@ pub fn pass<E: Estimator>(
     let npix = scene.camera.width * scene.camera.height;
     let chunk = npix.div_ceil(CHUNKS);
     let q = q.clamp(0.0, 1.0);
+    let Sampling { seed, sampler } = sampling.into();
     let key = seed ^ pass.wrapping_mul(0x9E37_79B9_7F4A_7C15);
     let run = |c: usize| -> ChunkResult {
         crate::accel::take_ray_count();
@@ -195,8 +222,8 @@ pub fn pass<E: Estimator>(
             {
                 continue;
             }
-            let mut stream =
-                IndependentStream::new(mcmc_core::rng::substream(key, PASS_PURPOSE, pixel as u64));
+            let rng = mcmc_core::rng::substream(key, PASS_PURPOSE, pixel as u64);
+            let mut stream = PixelStream::new(sampler, seed, pass, pixel, rng);
             let v = estimator.sample(scene, pixel, &mut stream, &mut splats);
             samples.push((pixel, v));
         }
@@ -285,7 +312,7 @@ mod tests {
             &self,
             _: &Scene,
             pixel: usize,
-            stream: &mut IndependentStream,
+            stream: &mut PixelStream,
             splats: &mut Vec<Splat>,
         ) -> Rgb {
             let u = uniform(&mut stream.rng);
@@ -343,6 +370,50 @@ mod tests {
         });
         for f in [ordered, with_bdpt] {
             assert!(f.iter().all(|g| *g == f[0]));
+        }
+    }
+
+    /// Returns the two film numbers of its sample as a colour.
+    struct FilmNumbers;
+
+    impl Estimator for FilmNumbers {
+        fn sample(&self, _: &Scene, _: usize, stream: &mut PixelStream, _: &mut Vec<Splat>) -> Rgb {
+            use crate::sampler::{CAMERA_STREAM, SampleStream};
+            stream.start_stream(CAMERA_STREAM);
+            let [u, v] = stream.next_2d();
+            Rgb::new(u, v, 0.0)
+        }
+        fn splats(&self) -> bool {
+            false
+        }
+    }
+
+    /// The pass driver gives each pixel one scrambled Sobol sequence and its passes successive
+    /// points: the film numbers of a pixel's first 16 passes put one point in each of the 16
+    /// cells of a 4 × 4 grid (and of every other grid of 16 cells, tested in `sampler`), for
+    /// each of several pixels. With independent numbers, or with a sequence scrambled afresh
+    /// every pass, they do not.
+    #[test]
+    fn the_passes_of_a_pixel_are_the_points_of_its_sobol_sequence() {
+        let scene = Scene::new(&builtin::builtin("cornell").unwrap(), Some((8, 4))).unwrap();
+        let cells = |sampler: PixelSampler, pixel: usize| -> Vec<usize> {
+            let mut count = vec![0; 16];
+            for p in 0..16 {
+                let (mut film, mut rays) = (Film::new(8, 4), 0);
+                let sampling = Sampling { seed: 3, sampler };
+                pass(&scene, &FilmNumbers, sampling, p, 1.0, &mut film, &mut rays);
+                let v = film.image()[pixel];
+                count[(v[0] * 4.0) as usize * 4 + (v[1] * 4.0) as usize] += 1;
+            }
+            count
+        };
+        for pixel in [0, 5, 31] {
+            assert_eq!(
+                cells(PixelSampler::Sobol, pixel),
+                vec![1; 16],
+                "pixel {pixel}"
+            );
+            assert_ne!(cells(PixelSampler::Independent, pixel), vec![1; 16]);
         }
     }
 }

@@ -9,7 +9,7 @@ use super::{Estimator, Splat};
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, offset_origin};
 use crate::path::{MisHeuristic, camera_ray};
-use crate::sampler::{CAMERA_STREAM, IndependentStream, SampleStream, TECHNIQUE_STREAM, layout};
+use crate::sampler::{CAMERA_STREAM, PixelStream, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
@@ -45,7 +45,7 @@ impl Estimator for PathTracer {
         &self,
         scene: &Scene,
         pixel: usize,
-        stream: &mut IndependentStream,
+        stream: &mut PixelStream,
         _splats: &mut Vec<Splat>,
     ) -> Rgb {
         let cs = camera_ray(scene, stream, Some(pixel));

@@ -12,7 +12,7 @@
 //! deterministic function of its state.
 
 use super::{Estimator, Splat};
-use crate::sampler::IndependentStream;
+use crate::sampler::PixelStream;
 use crate::scene::Scene;
 use mcmc_core::rng::{ChainRng, stream, uniform};
 
@@ -61,7 +61,7 @@ pub fn mean_luminance<E: Estimator>(
     let mut sum = 0.0;
     for i in 0..samples {
         let pixel = ((uniform(&mut choose) * pixels as f64) as usize).min(pixels - 1);
-        let mut sampler = IndependentStream::new(stream(seed, i as u64));
+        let mut sampler = PixelStream::independent(stream(seed, i as u64));
         splats.clear();
         let v = estimator.sample(scene, pixel, &mut sampler, &mut splats);
         let finite = |l: f64| if l.is_finite() { l } else { 0.0 };

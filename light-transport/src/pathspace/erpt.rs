@@ -19,7 +19,7 @@ use super::state::PathState;
 use crate::integrators::{Estimator, Splat};
 use crate::metropolis::ExpectedValue;
 use crate::path::{Vertex, camera_subpath, connect, light_subpath};
-use crate::sampler::IndependentStream;
+use crate::sampler::{IndependentStream, PixelStream, SampleStream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use crate::{Error, Result};
@@ -187,7 +187,7 @@ pub fn seed_paths(
     scene: &Scene,
     m: &Mutations,
     pixel: usize,
-    stream: &mut IndependentStream,
+    stream: &mut impl SampleStream,
     out: &mut Vec<(PathState, f64)>,
 ) {
     out.clear();
@@ -229,7 +229,7 @@ impl Estimator for Erpt {
         &self,
         scene: &Scene,
         pixel: usize,
-        stream: &mut IndependentStream,
+        stream: &mut PixelStream,
         splats: &mut Vec<Splat>,
     ) -> Rgb {
         let m = &self.settings.mutations;

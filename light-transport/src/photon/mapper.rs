@@ -25,9 +25,10 @@ use crate::geometry::{Ray, offset_origin};
 use crate::integrators::direct::{mis, next_event};
 use crate::integrators::{Estimator, Splat};
 use crate::path::{MisHeuristic, camera_ray};
-use crate::sampler::IndependentStream;
+use crate::sampler::PixelStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
+use mcmc_core::rng::ChainRng;
 use mcmc_core::rng::uniform;
 
 /// Settings of photon mapping.
@@ -200,13 +201,7 @@ impl PhotonMapper {
     /// Radiance arriving along `ray` (toward its origin) through specular bounces from the camera
     /// or a delta lobe: emission met is added; at the first non-specular point, the estimate of
     /// the module docs. `edges` counts the edges used so far.
-    fn shade(
-        &self,
-        scene: &Scene,
-        mut ray: Ray,
-        mut edges: usize,
-        rng: &mut IndependentStream,
-    ) -> Rgb {
+    fn shade(&self, scene: &Scene, mut ray: Ray, mut edges: usize, rng: &mut ChainRng) -> Rgb {
         let mut beta = Rgb::WHITE;
         let mut l = Rgb::BLACK;
         while edges < self.settings.max_edges {
@@ -242,7 +237,7 @@ impl PhotonMapper {
         wo: crate::math::DVec3,
         bsdf: &crate::bsdf::Bsdf,
         edges: usize,
-        rng: &mut IndependentStream,
+        rng: &mut ChainRng,
     ) -> Rgb {
         let mode = TransportMode::Radiance;
         let mut l = Rgb::BLACK;
@@ -258,8 +253,8 @@ impl PhotonMapper {
                 bsdf.eval(wo, wi, mode)
             });
         // Direct light by next-event estimation (MIS with the gather rays).
-        let choice = uniform(&mut rng.rng);
-        let u_light = [uniform(&mut rng.rng), uniform(&mut rng.rng)];
+        let choice = uniform(rng);
+        let u_light = [uniform(rng), uniform(rng)];
         l += next_event(
             scene,
             p,
@@ -296,7 +291,7 @@ impl PhotonMapper {
         mut ray: Ray,
         pdf: f64,
         mut edges: usize,
-        rng: &mut IndependentStream,
+        rng: &mut ChainRng,
     ) -> Rgb {
         let mode = TransportMode::Radiance;
         let mut beta = Rgb::WHITE;
@@ -374,10 +369,10 @@ fn bounce(
     bsdf: &crate::bsdf::Bsdf,
     p: &crate::geometry::SurfacePoint,
     wo: crate::math::DVec3,
-    rng: &mut IndependentStream,
+    rng: &mut ChainRng,
 ) -> Option<(Rgb, Ray, f64, bool)> {
-    let u_lobe = uniform(&mut rng.rng);
-    let u = [uniform(&mut rng.rng), uniform(&mut rng.rng)];
+    let u_lobe = uniform(rng);
+    let u = [uniform(rng), uniform(rng)];
     let bs = bsdf.sample(wo, u_lobe, u, TransportMode::Radiance)?;
     if bs.pdf == 0.0 || bs.f.is_black() {
         return None;
@@ -396,14 +391,14 @@ impl Estimator for PhotonMapper {
         &self,
         scene: &Scene,
         pixel: usize,
-        stream: &mut IndependentStream,
+        stream: &mut PixelStream,
         _splats: &mut Vec<Splat>,
     ) -> Rgb {
         let cs = camera_ray(scene, stream, Some(pixel));
         if cs.we == 0.0 {
             return Rgb::BLACK;
         }
-        let l = self.shade(scene, cs.ray, 0, stream);
+        let l = self.shade(scene, cs.ray, 0, &mut stream.rng);
         if l.is_finite() { l } else { Rgb::BLACK }
     }
 

@@ -38,11 +38,13 @@ pub const ENTRY: Entry = Entry {
     name: "bdpt",
     about: "Bidirectional path tracing, all strategies, MIS",
     unbiased: true,
+    passes: true,
     build: |scene, c, a| {
         let mut b = bdpt(c);
         b.roulette = roulette(&a.bdpt)?;
         b.shadow_roulette = shadow_roulette(&a.bdpt, scene, &b)?;
         Ok(Box::new(Passes {
+            sampler: c.pass_sampler(),
             estimator: b,
             details: |b, _| {
                 let mut notes = Roulette::report(b.roulette);

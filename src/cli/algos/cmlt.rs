@@ -13,6 +13,7 @@ pub const ENTRY: Entry = Entry {
     name: "cmlt",
     about: "Charted MLT: technique charts with path inversion, chart swaps by serial tempering or replica exchange (--swaps)",
     unbiased: false,
+    passes: false,
     build: |scene, c, a| {
         Ok(Box::new(Metropolis {
             method: a.cmlt.cmlt(scene, c, a)?,

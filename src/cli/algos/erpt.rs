@@ -9,6 +9,7 @@ pub const ENTRY: Entry = Entry {
     name: "erpt",
     about: "Energy redistribution path tracing (Cline et al.): short perturbation chains from path-traced seeds",
     unbiased: true,
+    passes: true,
     build: |scene, c, a| {
         let p = &a.pathspace;
         let mut settings = ErptSettings::new(c.max_edges);
@@ -16,6 +17,7 @@ pub const ENTRY: Entry = Entry {
         settings.chain_length = p.erpt_chain_length;
         settings.chains_per_seed = p.erpt_chains;
         Ok(Box::new(Passes {
+            sampler: c.pass_sampler(),
             estimator: Erpt::new(scene, settings)?,
             details: Erpt::summary,
         }))

@@ -10,11 +10,15 @@ pub const ENTRY: Entry = Entry {
     name: "lt",
     about: "Light tracing (splats from light subpaths)",
     unbiased: true,
+    passes: true,
     build: |_, c, _| {
-        Ok(Box::new(Passes::new(LightTracer {
-            walk: WalkSettings {
-                max_edges: c.max_edges,
-            },
-        })))
+        Ok(Box::new(Passes {
+            sampler: c.pass_sampler(),
+            ..Passes::new(LightTracer {
+                walk: WalkSettings {
+                    max_edges: c.max_edges,
+                },
+            })
+        }))
     },
 };

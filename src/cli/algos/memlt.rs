@@ -10,6 +10,7 @@ pub const ENTRY: Entry = Entry {
     name: "memlt",
     about: "Manifold exploration MLT (Jakob & Marschner): bidirectional, manifold perturbation and new-path mutations",
     unbiased: false,
+    passes: false,
     build: |_, c, a| {
         let p = &a.pathspace;
         let mutations = p.mutations(c, &a.metropolis, &p.memlt_mutations)?;

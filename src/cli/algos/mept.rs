@@ -10,6 +10,7 @@ pub const ENTRY: Entry = Entry {
     name: "mept",
     about: "Manifold exploration path tracing (Jakob & Marschner): ERPT chains of manifold perturbations",
     unbiased: true,
+    passes: true,
     build: |scene, c, a| {
         let p = &a.pathspace;
         let mut settings = ErptSettings::new(c.max_edges);
@@ -17,6 +18,7 @@ pub const ENTRY: Entry = Entry {
         settings.chain_length = p.erpt_chain_length;
         settings.chains_per_seed = p.erpt_chains;
         Ok(Box::new(Passes {
+            sampler: c.pass_sampler(),
             estimator: Erpt::new(scene, settings)?,
             details: Erpt::summary,
         }))

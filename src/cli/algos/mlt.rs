@@ -9,6 +9,7 @@ pub const ENTRY: Entry = Entry {
     name: "mlt",
     about: "Path-space MLT (Veach & Guibas): bidirectional, lens-subpath, perturbation and new-path mutations",
     unbiased: false,
+    passes: false,
     build: |_, c, a| {
         let mutations = a
             .pathspace

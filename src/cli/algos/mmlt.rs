@@ -10,6 +10,7 @@ pub const ENTRY: Entry = Entry {
     name: "mmlt",
     about: "Multiplexed MLT (Hachisuka et al.): one strategy per sample, chains per path length",
     unbiased: false,
+    passes: false,
     build: |_, c, a| {
         let m = &a.metropolis;
         Ok(Box::new(Metropolis {

@@ -51,6 +51,7 @@ pub const ENTRY: Entry = Entry {
     name: "mps",
     about: "Metropolis photon sampling (Fan, Chenney & Lai): photon maps from Metropolis light paths, user paths, final gather",
     unbiased: false,
+    passes: true,
     build: |scene, c, a| {
         let p = &a.mps;
         let lantern = light_transport::photon::metropolis::proposals();
@@ -111,6 +112,7 @@ pub const ENTRY: Entry = Entry {
         })
         .map_err(CliError::Render)?;
         Ok(Box::new(Passes {
+            sampler: c.pass_sampler(),
             estimator: mapper,
             details: PhotonMapper::summary,
         }))

@@ -68,6 +68,7 @@ pub const ENTRY: Entry = Entry {
     name: "pm",
     about: "Photon mapping (Jensen): global and caustic maps, final gather with MIS direct light",
     unbiased: false,
+    passes: true,
     build: |scene, c, a| {
         let p = &a.pm;
         let (global_radius, caustic_radius) = p.radii()?;
@@ -83,6 +84,7 @@ pub const ENTRY: Entry = Entry {
         let mapper =
             PhotonMapper::new(scene, settings).map_err(|e| settings_error(e.to_string()))?;
         Ok(Box::new(Passes {
+            sampler: c.pass_sampler(),
             estimator: mapper,
             details: PhotonMapper::summary,
         }))

@@ -9,6 +9,7 @@ pub const ENTRY: Entry = Entry {
     name: "pssmlt",
     about: "Primary-sample-space MLT (Kelemen) on BDPT with all connections",
     unbiased: false,
+    passes: false,
     build: |_, c, a| {
         let m = &a.metropolis;
         let mut bdpt = super::bdpt::bdpt(c);

@@ -10,6 +10,7 @@ pub const ENTRY: Entry = Entry {
     name: "pt",
     about: "Path tracing with next-event estimation and MIS",
     unbiased: true,
+    passes: true,
     build: |scene, c, a| {
         let mut pt = PathTracer {
             max_edges: c.max_edges,
@@ -18,6 +19,7 @@ pub const ENTRY: Entry = Entry {
         };
         pt.shadow_roulette = shadow_roulette(&a.bdpt, scene, &pt)?;
         Ok(Box::new(Passes {
+            sampler: c.pass_sampler(),
             estimator: pt,
             details: |pt, _| shadow_note(pt.shadow_roulette),
         }))

@@ -23,7 +23,12 @@
 //! Implementations: [`IndependentStream`] (fresh random numbers), [`ReplayStream`] (a given vector
 //! per substream — chart forward maps), [`Recorder`] (wraps a stream and keeps what was read), and
 //! [`SliceStream`] (a writable stream over given vectors, where inverses [`WritableStream::put`]
-//! the numbers of a path back in the layout).
+//! the numbers of a path back in the layout); and for the pass-based estimators, [`PixelStream`]
+//! (independent numbers or a per-pixel Owen-scrambled Sobol sequence, [`PixelSampler`]).
+
+mod pixel;
+
+pub use pixel::{PixelSampler, PixelStream, SOBOL_PASSES};
 
 use mcmc_core::ChainRng;
 use mcmc_core::rng::uniform;
