@@ -403,6 +403,16 @@ fn bad_input_gives_clear_errors() {
         ),
         (
             vec![
+                "render".into(),
+                "--algo".into(),
+                "mmlt".into(),
+                "--sampler".into(),
+                "independent".into(),
+            ],
+            "--sampler applies to the algorithms that render in passes",
+        ),
+        (
+            vec![
                 "compare".into(),
                 "cornell".into(),
                 "--reference".into(),
@@ -558,4 +568,27 @@ fn compact_bvh_renders_the_same_image() {
         n
     };
     assert!(references(&["--compact-bvh"]) < references(&[]));
+}
+
+/// `--sampler` reaches the pass-based estimators: the report names it, the two samplers render
+/// different images from one seed, and Sobol is the default.
+#[test]
+fn the_sampler_option_reaches_the_passes() {
+    let d = tmp("sampler");
+    let o = |f: &str| d.join(f).to_string_lossy().into_owned();
+    let mut images = Vec::new();
+    for (extra, name) in [
+        (&[][..], "sobol"),
+        (&["--sampler", "sobol"][..], "sobol"),
+        (&["--sampler", "independent"][..], "independent"),
+    ] {
+        let out = o(&format!("{}-{name}.exr", images.len()));
+        let (ok, stdout, e) = render_cornell("bdpt", "16x12", extra, &out);
+        assert!(ok, "{extra:?}: {e}");
+        assert!(stdout.contains(&format!("sampler    {name}")), "{stdout}");
+        images.push(std::fs::read(&out).unwrap());
+    }
+    assert_eq!(images[0], images[1], "Sobol is the default");
+    assert_ne!(images[1], images[2], "the samplers draw different numbers");
+    let _ = std::fs::remove_dir_all(&d);
 }
