@@ -27,6 +27,7 @@
 //! (independent numbers or a per-pixel Owen-scrambled Sobol sequence, [`PixelSampler`]).
 
 mod pixel;
+mod sobol;
 
 pub use pixel::{PixelSampler, PixelStream, SOBOL_PASSES};
 

@@ -1,37 +1,35 @@
 //! The stream of one sample of a pass-based estimator (path tracing, light tracing, BDPT and the
 //! other estimators the pass driver runs): fresh independent numbers, or a randomised
-//! low-discrepancy sequence per pixel — Owen-scrambled Sobol points (Sobol 1967; direction numbers
-//! of Joe & Kuo 2008; nested uniform scrambling, Owen 1995, in the hash-based form of Burley 2020,
-//! from the `sobol_burley` crate).
+//! low-discrepancy sequence per pixel: Owen-scrambled Sobol points (Sobol 1967; nested uniform
+//! scrambling, Owen 1995, in the hash-based form of Burley 2020).
 //!
 //! # The low-discrepancy stream
 //!
-//! Pixel `p` of a render with seed `σ` owns one scrambled sequence; its `i`-th pass takes the
-//! sequence's `i`-th point. The numbers of a sample are grouped into four-dimensional *sets*,
-//! each the first four dimensions of a Sobol sequence scrambled and shuffled by its own seed
-//! (Burley's *padding*): sets are randomly associated with each other, and within a set the
-//! points of the passes are stratified in every dimension and in the pairs `(0, 1)` and
-//! `(2, 3)`, which form `(0, m, 2)`-nets (the first `2^m` passes put exactly one point in each
-//! of `2^m` equal rectangles, of any shape; every single dimension is stratified likewise).
-//! The sets follow the sample layout ([`crate::sampler`]) so that every pair of numbers that
-//! makes one two-dimensional choice takes lanes 0 and 1 of a set:
+//! Pixel `p` of a render with seed `σ` owns one scrambled sequence of each *set* of numbers; its
+//! `i`-th pass takes the sequences' `i`-th points. A set is two numbers: the first two dimensions
+//! of Sobol's sequence, shuffled and Owen-scrambled by the set's own seed ([`super::sobol`];
+//! Burley's *padding*), so that sets are randomly associated with each other while within a set
+//! the passes' points form `(0, m, 2)`-nets (the first `2^m` passes put exactly one point in each
+//! of `2^m` equal rectangles of any shape; each number alone is stratified likewise). The sets
+//! follow the sample layout ([`crate::sampler`]), every two-dimensional choice a set of its own:
 //!
-//! | substream | set | lanes 0, 1 | lane 2 | lane 3 |
-//! |---|---|---|---|---|
-//! | camera | endpoint | film position | | |
-//! | camera | endpoint, second set | lens position | | |
-//! | light | endpoint | position on the light | light choice | |
-//! | light | endpoint, second set | emitted direction | | |
-//! | camera, light | each scattering vertex | direction | lobe choice | Russian roulette |
-//! | technique | every three numbers (a next-event choice) | light position | light choice | |
+//! | substream | sets |
+//! |---|---|
+//! | camera | film position; lens position; per scattering vertex: direction, (lobe choice, roulette) |
+//! | light | position on the light; emitted direction; light choice; per scattering vertex: direction, (lobe choice, roulette) |
+//! | technique | per next-event choice (three numbers): light position, light choice |
 //!
-//! Every point of an Owen-scrambled sequence is uniform on the unit cube, so every estimator
-//! stays unbiased; the variance falls where the integrand is smooth in the stratified
-//! dimensions (measured in the README). The sequence has `2^16` points: passes beyond
-//! that read independent numbers. The crate's numbers have 23 bits; the stream fills the
-//! remaining 30 of an `f64`'s 53 with random bits, which keeps each number uniform and every
-//! stratum as it was.
+//! Only the endpoints and the first [`SOBOL_VERTICES`] scattering vertices of each subpath (and
+//! next-event choices) read Sobol numbers; deeper vertices read independent ones, which changed
+//! nothing measurable (below).
+//!
+//! Every point of an Owen-scrambled sequence is uniform, so every estimator stays unbiased; the
+//! variance falls where the integrand is smooth in the stratified dimensions (measured in the
+//! README). The sequences have `2^16` points: passes beyond that read independent numbers. A
+//! number takes the scrambled point's 32 bits and 21 random ones, which keeps it uniform and
+//! every stratum as it was.
 
+use super::sobol::Point;
 use super::{
     CAMERA_BLOCK, CAMERA_STREAM, LIGHT_BLOCK, LIGHT_STREAM, STREAMS, SampleStream, VERTEX_BLOCK,
 };
@@ -58,14 +56,13 @@ impl std::fmt::Display for PixelSampler {
     }
 }
 
-/// Passes with a low-discrepancy point: the length of the crate's sequences.
-pub const SOBOL_PASSES: u64 = 1 << 16;
+/// Passes with a low-discrepancy point: the length of the sequences.
+pub const SOBOL_PASSES: u64 = super::sobol::POINTS;
 
 /// Scattering vertices of each subpath (and next-event choices) that read Sobol numbers; deeper
 /// ones read independent numbers. Measured on `cornell` and `door` (BDPT, 16 spp, MSE between
-/// seeds): Sobol at every vertex, or from the endpoints to the third vertex, the second or the
-/// first, all gave the same MSE (within 4%, 0.42× and 0.72× that of independent numbers), and
-/// every vertex's set costs about 33 ns (BDPT ran 3% slower with Sobol at every vertex).
+/// seeds): Sobol numbers at every vertex, or from the endpoints to the third vertex, the second
+/// or the first, all gave the same MSE (within 4%; 0.42× and 0.72× that of independent numbers).
 pub const SOBOL_VERTICES: usize = 2;
 
 /// The numbers of one sample of one pixel in one pass ([`PixelStream::new`]).
@@ -80,57 +77,44 @@ pub struct PixelStream {
     sobol: Option<SobolPoint>,
 }
 
-/// A pixel's point of the current pass, computed a set at a time.
+/// A pixel's points of the current pass, computed a set at a time.
 #[derive(Clone, Debug)]
 struct SobolPoint {
     pass: u32,
     pixel_seed: u32,
-    /// The last set computed in each substream and its four numbers, as 23-bit integers.
-    cache: [(u32, [u32; 4]); STREAMS],
+    /// The last two sets read in each substream and their points (a vertex reads two sets).
+    cache: [[(u32, Point); 2]; STREAMS],
 }
 
 /// No set computed yet.
 const NO_SET: u32 = u32::MAX;
-/// The set of the second pair of an endpoint block (the camera's lens position, the light's
-/// emitted direction); vertex sets are numbered from 1.
-const ENDPOINT_PAIR_SET: u32 = u32::MAX - 1;
-/// Lane of each vertex-block number (lobe, direction, direction, roulette): the direction takes
-/// the net-forming pair.
-const VERTEX_LANES: [usize; VERTEX_BLOCK] = [2, 0, 1, 3];
 /// Numbers of a next-event choice in the technique substream (light choice, light position).
 const NEXT_EVENT_BLOCK: usize = 3;
 
-/// The set and lane of position `p` of substream `stream` (module docs); `None` past the
-/// first [`SOBOL_VERTICES`] scattering vertices or next-event choices.
+/// The set and lane of position `p` of substream `stream` (module docs); `None` past the first
+/// [`SOBOL_VERTICES`] scattering vertices or next-event choices.
 fn set_of(stream: usize, p: usize) -> Option<(u32, usize)> {
-    let vertex = |q: usize| {
+    // The sets of a vertex block (lobe, direction, direction, roulette), the first being `first`.
+    let vertex = |first: usize, q: usize| {
         let b = q / VERTEX_BLOCK;
-        (b < SOBOL_VERTICES).then(|| ((1 + b) as u32, VERTEX_LANES[q % VERTEX_BLOCK]))
+        let (set, lane) = [(1, 0), (0, 0), (0, 1), (1, 1)][q % VERTEX_BLOCK];
+        (b < SOBOL_VERTICES).then_some(((first + 2 * b + set) as u32, lane))
     };
     match stream {
-        // Film position, then lens position.
-        CAMERA_STREAM if p < 2 => Some((0, p)),
-        CAMERA_STREAM if p < CAMERA_BLOCK => Some((ENDPOINT_PAIR_SET, p - 2)),
-        CAMERA_STREAM => vertex(p - CAMERA_BLOCK),
-        // Light choice, position on the light, then emitted direction.
-        LIGHT_STREAM if p == 0 => Some((0, 2)),
-        LIGHT_STREAM if p < 3 => Some((0, p - 1)),
-        LIGHT_STREAM if p < LIGHT_BLOCK => Some((ENDPOINT_PAIR_SET, p - 3)),
-        LIGHT_STREAM => vertex(p - LIGHT_BLOCK),
+        // Film position, lens position.
+        CAMERA_STREAM if p < CAMERA_BLOCK => Some(((p / 2) as u32, p % 2)),
+        CAMERA_STREAM => vertex(2, p - CAMERA_BLOCK),
+        // Light choice, position on the light, emitted direction.
+        LIGHT_STREAM if p == 0 => Some((2, 0)),
+        LIGHT_STREAM if p < LIGHT_BLOCK => Some((((p - 1) / 2) as u32, (p - 1) % 2)),
+        LIGHT_STREAM => vertex(3, p - LIGHT_BLOCK),
+        // Light choice, light position.
         _ => {
             let b = p / NEXT_EVENT_BLOCK;
-            (b < SOBOL_VERTICES).then(|| (b as u32, [2, 0, 1][p % NEXT_EVENT_BLOCK]))
+            let (set, lane) = [(1, 0), (0, 0), (0, 1)][p % NEXT_EVENT_BLOCK];
+            (b < SOBOL_VERTICES).then_some(((2 * b + set) as u32, lane))
         }
     }
-}
-
-/// A 32-bit avalanche hash (Wellons' `lowbias32`).
-fn mix(mut z: u32) -> u32 {
-    z ^= z >> 16;
-    z = z.wrapping_mul(0x7feb_352d);
-    z ^= z >> 15;
-    z = z.wrapping_mul(0x846c_a68b);
-    z ^ (z >> 16)
 }
 
 /// A 32-bit seed from a 64-bit key (SplitMix64's finaliser, folded).
@@ -143,17 +127,22 @@ fn fold(key: u64) -> u32 {
 }
 
 impl SobolPoint {
-    /// The four numbers of `set` in substream `stream`, as 23-bit integers.
-    fn set(&mut self, stream: usize, set: u32) -> &[u32; 4] {
-        let (cached, values) = &mut self.cache[stream];
-        if *cached != set {
-            let seed = mix(self.pixel_seed ^ mix(set ^ mix(stream as u32 + 1)));
-            let v = sobol_burley::sample_4d(self.pass, 0, seed);
-            // The crate's floats are exact multiples of 2^-23.
-            *values = v.map(|x| (x * (1u32 << 23) as f32) as u32);
-            *cached = set;
+    /// Number `lane` of `set` in substream `stream`, as a 32-bit fixed-point fraction. A set's
+    /// seed is the pixel's plus a multiple of the golden ratio per set; the sequence hashes its
+    /// seed before use, so these are as good as independent seeds (the crate's documentation,
+    /// and the independence test below).
+    fn number(&mut self, stream: usize, set: u32, lane: usize) -> u32 {
+        let cache = &mut self.cache[stream];
+        if cache[0].0 != set {
+            if cache[1].0 == set {
+                cache.swap(0, 1);
+            } else {
+                let key = (stream as u32 * 256 + set + 1).wrapping_mul(0x9E37_79B9);
+                cache[1] = cache[0];
+                cache[0] = (set, Point::new(self.pass, self.pixel_seed.wrapping_add(key)));
+            }
         }
-        values
+        cache[0].1.coordinate(lane)
     }
 }
 
@@ -165,7 +154,7 @@ impl PixelStream {
         let sobol = (sampler == PixelSampler::Sobol && pass < SOBOL_PASSES).then(|| SobolPoint {
             pass: pass as u32,
             pixel_seed: fold(seed ^ (pixel as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)),
-            cache: [(NO_SET, [0; 4]); STREAMS],
+            cache: [[(NO_SET, Point::new(0, 0)); 2]; STREAMS],
         });
         Self {
             rng,
@@ -194,10 +183,10 @@ impl SampleStream for PixelStream {
         let Some((set, lane)) = set_of(self.current, p) else {
             return uniform(&mut self.rng);
         };
-        let high = point.set(self.current, set)[lane] as u64;
-        // 23 bits of the point and 30 random ones: exactly representable, below 1.
-        let low = self.rng.next_u64() >> 34;
-        ((high << 30) | low) as f64 * (1.0 / (1u64 << 53) as f64)
+        let high = u64::from(point.number(self.current, set, lane));
+        // 32 bits of the point and 21 random ones: exactly representable, below 1.
+        let low = self.rng.next_u64() >> 43;
+        ((high << 21) | low) as f64 * (1.0 / (1u64 << 53) as f64)
     }
     fn seek(&mut self, index: usize) {
         self.pos[self.current] = index;
@@ -226,7 +215,7 @@ mod tests {
             for p in 0..200 {
                 match set_of(s, p) {
                     Some((set, lane)) => {
-                        assert!(p < sobol && lane < 4, "stream {s} position {p}");
+                        assert!(p < sobol && lane < 2, "stream {s} position {p}");
                         assert!(seen.insert((set, lane)), "stream {s} position {p}");
                     }
                     None => assert!(p >= sobol, "stream {s} position {p}"),
@@ -236,17 +225,19 @@ mod tests {
         }
         let at = |s, p| set_of(s, p).unwrap();
         assert_eq!(at(CAMERA_STREAM, layout::FILM), (0, 0));
-        assert_eq!(at(CAMERA_STREAM, layout::LENS + 1), (ENDPOINT_PAIR_SET, 1));
-        let direction = layout::camera_vertex(1) + layout::DIRECTION;
-        assert_eq!(at(CAMERA_STREAM, direction), (1, 0));
-        let roulette = layout::light_vertex(2) + layout::ROULETTE;
-        assert_eq!(at(LIGHT_STREAM, roulette), (2, 3));
-        assert_eq!(at(LIGHT_STREAM, layout::LIGHT_CHOICE), (0, 2));
+        assert_eq!(at(CAMERA_STREAM, layout::LENS + 1), (1, 1));
+        let vertex = |b, offset| layout::camera_vertex(b) + offset;
+        assert_eq!(at(CAMERA_STREAM, vertex(1, layout::DIRECTION)), (2, 0));
+        assert_eq!(at(CAMERA_STREAM, vertex(1, layout::LOBE)), (3, 0));
+        assert_eq!(at(CAMERA_STREAM, vertex(2, layout::ROULETTE)), (5, 1));
+        assert_eq!(at(LIGHT_STREAM, layout::LIGHT_CHOICE), (2, 0));
         assert_eq!(at(LIGHT_STREAM, layout::LIGHT_POSITION), (0, 0));
-        assert_eq!(
-            at(LIGHT_STREAM, layout::LIGHT_DIRECTION + 1),
-            (ENDPOINT_PAIR_SET, 1)
-        );
+        assert_eq!(at(LIGHT_STREAM, layout::LIGHT_DIRECTION + 1), (1, 1));
+        let vertex = |b, offset| layout::light_vertex(b) + offset;
+        assert_eq!(at(LIGHT_STREAM, vertex(1, layout::DIRECTION + 1)), (3, 1));
+        assert_eq!(at(LIGHT_STREAM, vertex(2, layout::ROULETTE)), (6, 1));
+        assert_eq!(at(TECHNIQUE_STREAM, 4), (2, 0));
+        assert_eq!(at(TECHNIQUE_STREAM, 3), (3, 0));
     }
 
     /// The film positions of a pixel's first 2^m passes form a (0, m, 2)-net: one point in each
@@ -299,6 +290,21 @@ mod tests {
         assert!(is_net(&pairs(LIGHT_STREAM, light_direction), 6));
         let next_event_position = NEXT_EVENT_BLOCK * (SOBOL_VERTICES - 1) + 1;
         assert!(is_net(&pairs(TECHNIQUE_STREAM, next_event_position), 6));
+        // Single numbers: one in each of 64 intervals.
+        let single = |stream_index, at| {
+            let mut cells = [0; 64];
+            for i in 0..64 {
+                let mut s = PixelStream::new(PixelSampler::Sobol, 3, i, 11, stream(3, i));
+                s.start_stream(stream_index);
+                s.seek(at);
+                cells[(s.next_1d() * 64.0) as usize] += 1;
+            }
+            cells.iter().all(|&c| c == 1)
+        };
+        assert!(single(CAMERA_STREAM, layout::camera_vertex(1) + layout::LOBE));
+        assert!(single(LIGHT_STREAM, layout::light_vertex(2) + layout::ROULETTE));
+        assert!(single(LIGHT_STREAM, layout::LIGHT_CHOICE));
+        assert!(single(TECHNIQUE_STREAM, 0));
     }
 
     /// Across pixels and seeds, every number is uniform on [0, 1): a chi-square test on 64 bins
