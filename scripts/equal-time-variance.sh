@@ -3,7 +3,9 @@
 # two renders with different seeds differ by noise alone, so E[MSE(a₁, a₂)] = 2 Var and
 # √(MSE(a₁, a₂)/2) is the RMSE of one render against the exact image (no reference noise to
 # subtract). Each setting renders PAIRS pairs of seeds; the script prints the samples per pixel
-# of the first render, the RMSE from the mean MSE of the pairs, and its ratio to the first setting.
+# of the first render, the RMSE from the mean MSE of the pairs and its ratio to the first
+# setting, and the same from the median pair (robust to a rare firefly, which can dominate a
+# pair's MSE on scenes such as veach-bidir).
 #
 #   scripts/equal-time-variance.sh OUT TIME ALGO "SCENES" "SETTING" ["SETTING" ...]
 #   scripts/equal-time-variance.sh out/sampler 20s bdpt "cornell door" "--sampler independent" "--sampler sobol"
@@ -23,7 +25,7 @@ if [[ -z ${BIN:-} ]]; then
   cargo build --release --quiet
   BIN=target/release/charted
 fi
-printf '%-12s %-36s %10s %12s %8s\n' scene setting spp RMSE ratio
+printf '%-12s %-28s %8s %11s %7s %13s %7s\n' scene setting spp RMSE ratio "median RMSE" ratio
 for scene in $scenes; do
   name=$scene res=256x256 depth=8
   if [[ $scene == veach-bidir ]]; then
@@ -36,7 +38,7 @@ for scene in $scenes; do
   k=0
   for setting in "$@"; do
     k=$((k + 1))
-    spp= sum=0
+    spp= sum=0 mses=()
     for pair in $(seq 1 "$pairs"); do
       for seed in $((2 * pair - 1)) $((2 * pair)); do
         # shellcheck disable=SC2086 # a setting is a list of options
@@ -47,10 +49,15 @@ for scene in $scenes; do
       mse=$("$BIN" diff "$out/$name-$k-$((2 * pair - 1)).exr" "$out/$name-$k-$((2 * pair)).exr" |
         sed -n 's/.*  MSE \([^ ]*\) .*/\1/p')
       sum=$(awk -v s="$sum" -v m="$mse" 'BEGIN { print s + m }')
+      mses+=("$mse")
     done
     rmse=$(awk -v s="$sum" -v n="$pairs" 'BEGIN { printf "%.4e", sqrt(s / n / 2) }')
-    [[ -z $base ]] && base=$rmse
+    median=$(printf '%s\n' "${mses[@]}" | sort -g |
+      awk '{ v[NR] = $1 } END { m = (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2; printf "%.4e", sqrt(m / 2) }')
+    [[ -z $base ]] && base=$rmse base_median=$median
     ratio=$(awk -v r="$rmse" -v b="$base" 'BEGIN { printf "%.2f", r / b }')
-    printf '%-12s %-36s %10s %12s %7s×\n' "$name" "${setting:-(defaults)}" "$spp" "$rmse" "$ratio"
+    ratio_median=$(awk -v r="$median" -v b="$base_median" 'BEGIN { printf "%.2f", r / b }')
+    printf '%-12s %-28s %8s %11s %6s× %13s %6s×\n' "$name" "${setting:-(defaults)}" "$spp" "$rmse" \
+      "$ratio" "$median" "$ratio_median"
   done
 done
