@@ -62,8 +62,9 @@ pub const SOBOL_PASSES: u64 = super::sobol::POINTS;
 /// Scattering vertices of each subpath (and next-event choices) that read Sobol numbers; deeper
 /// ones read independent numbers. Measured on `cornell` and `door` (BDPT, 16 spp, MSE between
 /// seeds): Sobol numbers at every vertex, or from the endpoints to the third vertex, the second
-/// or the first, all gave the same MSE (within 4%; 0.42× and 0.72× that of independent numbers).
-pub const SOBOL_VERTICES: usize = 2;
+/// or the first, all gave the same MSE (within 4%; 0.42× and 0.72× that of independent numbers),
+/// while each set costs about 10 ns, which path tracing on the cheap built-ins notices.
+pub const SOBOL_VERTICES: usize = 1;
 
 /// The numbers of one sample of one pixel in one pass ([`PixelStream::new`]).
 #[derive(Clone, Debug)]
@@ -80,14 +81,31 @@ pub struct PixelStream {
 /// A pixel's points of the current pass, computed a set at a time.
 #[derive(Clone, Debug)]
 struct SobolPoint {
-    pass: u32,
+    /// The pass, its bits reversed.
+    pass_reversed: u32,
     pixel_seed: u32,
-    /// The last two sets read in each substream and their points (a vertex reads two sets).
-    cache: [[(u32, Point); 2]; STREAMS],
+    /// Each substream's sets, computed when first read.
+    sets: [[Option<Point>; MAX_SETS]; STREAMS],
 }
 
-/// No set computed yet.
-const NO_SET: u32 = u32::MAX;
+/// Sets of each substream (those [`set_of`] places).
+#[cfg(test)]
+const SETS: [usize; STREAMS] = [
+    2 + 2 * SOBOL_VERTICES,
+    3 + 2 * SOBOL_VERTICES,
+    2 * SOBOL_VERTICES,
+];
+/// The most sets of any substream.
+const MAX_SETS: usize = 3 + 2 * SOBOL_VERTICES;
+
+/// Positions of each substream that read Sobol numbers (camera, light, technique): those
+/// [`set_of`] places.
+const SOBOL_POSITIONS: [usize; STREAMS] = [
+    CAMERA_BLOCK + VERTEX_BLOCK * SOBOL_VERTICES,
+    LIGHT_BLOCK + VERTEX_BLOCK * SOBOL_VERTICES,
+    NEXT_EVENT_BLOCK * SOBOL_VERTICES,
+];
+
 /// Numbers of a next-event choice in the technique substream (light choice, light position).
 const NEXT_EVENT_BLOCK: usize = 3;
 
@@ -132,17 +150,11 @@ impl SobolPoint {
     /// seed before use, so these are as good as independent seeds (the crate's documentation,
     /// and the independence test below).
     fn number(&mut self, stream: usize, set: u32, lane: usize) -> u32 {
-        let cache = &mut self.cache[stream];
-        if cache[0].0 != set {
-            if cache[1].0 == set {
-                cache.swap(0, 1);
-            } else {
-                let key = (stream as u32 * 256 + set + 1).wrapping_mul(0x9E37_79B9);
-                cache[1] = cache[0];
-                cache[0] = (set, Point::new(self.pass, self.pixel_seed.wrapping_add(key)));
-            }
-        }
-        cache[0].1.coordinate(lane)
+        let key = (stream as u32 * 256 + set + 1).wrapping_mul(0x9E37_79B9);
+        let (pass, seed) = (self.pass_reversed, self.pixel_seed.wrapping_add(key));
+        self.sets[stream][set as usize]
+            .get_or_insert_with(|| Point::new(pass, seed))
+            .coordinate(lane)
     }
 }
 
@@ -152,9 +164,9 @@ impl PixelStream {
     /// beyond [`SOBOL_PASSES`], else the pixel's scrambled Sobol point of that pass.
     pub fn new(sampler: PixelSampler, seed: u64, pass: u64, pixel: usize, rng: ChainRng) -> Self {
         let sobol = (sampler == PixelSampler::Sobol && pass < SOBOL_PASSES).then(|| SobolPoint {
-            pass: pass as u32,
+            pass_reversed: (pass as u32).reverse_bits(),
             pixel_seed: fold(seed ^ (pixel as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)),
-            cache: [[(NO_SET, Point::new(0, 0)); 2]; STREAMS],
+            sets: [[None; MAX_SETS]; STREAMS],
         });
         Self {
             rng,
@@ -162,6 +174,19 @@ impl PixelStream {
             pos: [0; STREAMS],
             sobol,
         }
+    }
+
+    /// The Sobol number at position `p` of the current substream (below its
+    /// [`SOBOL_POSITIONS`]).
+    #[inline(never)]
+    fn sobol_number(&mut self, p: usize) -> f64 {
+        let (Some(point), Some((set, lane))) = (&mut self.sobol, set_of(self.current, p)) else {
+            return uniform(&mut self.rng);
+        };
+        let high = u64::from(point.number(self.current, set, lane));
+        // 32 bits of the point and 21 random ones: exactly representable, below 1.
+        let low = self.rng.next_u64() >> 43;
+        ((high << 21) | low) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
     /// Independent numbers from `rng` (for estimators run outside the pass driver).
@@ -174,19 +199,16 @@ impl SampleStream for PixelStream {
     fn start_stream(&mut self, index: usize) {
         self.current = index;
     }
+    #[inline]
     fn next_1d(&mut self) -> f64 {
         let p = self.pos[self.current];
         self.pos[self.current] += 1;
-        let Some(point) = &mut self.sobol else {
-            return uniform(&mut self.rng);
-        };
-        let Some((set, lane)) = set_of(self.current, p) else {
-            return uniform(&mut self.rng);
-        };
-        let high = u64::from(point.number(self.current, set, lane));
-        // 32 bits of the point and 21 random ones: exactly representable, below 1.
-        let low = self.rng.next_u64() >> 43;
-        ((high << 21) | low) as f64 * (1.0 / (1u64 << 53) as f64)
+        // Most numbers lie past the Sobol positions: one comparison sends them to the generator.
+        if self.sobol.is_some() && p < SOBOL_POSITIONS[self.current] {
+            self.sobol_number(p)
+        } else {
+            uniform(&mut self.rng)
+        }
     }
     fn seek(&mut self, index: usize) {
         self.pos[self.current] = index;
@@ -222,6 +244,9 @@ mod tests {
                 }
             }
             assert_eq!(seen.len(), sobol, "stream {s}");
+            assert_eq!(SOBOL_POSITIONS[s], sobol, "stream {s}");
+            let sets: std::collections::HashSet<u32> = seen.iter().map(|&(set, _)| set).collect();
+            assert_eq!(sets, (0..SETS[s] as u32).collect(), "stream {s}");
         }
         let at = |s, p| set_of(s, p).unwrap();
         assert_eq!(at(CAMERA_STREAM, layout::FILM), (0, 0));
@@ -229,15 +254,15 @@ mod tests {
         let vertex = |b, offset| layout::camera_vertex(b) + offset;
         assert_eq!(at(CAMERA_STREAM, vertex(1, layout::DIRECTION)), (2, 0));
         assert_eq!(at(CAMERA_STREAM, vertex(1, layout::LOBE)), (3, 0));
-        assert_eq!(at(CAMERA_STREAM, vertex(2, layout::ROULETTE)), (5, 1));
+        assert_eq!(at(CAMERA_STREAM, vertex(1, layout::ROULETTE)), (3, 1));
         assert_eq!(at(LIGHT_STREAM, layout::LIGHT_CHOICE), (2, 0));
         assert_eq!(at(LIGHT_STREAM, layout::LIGHT_POSITION), (0, 0));
         assert_eq!(at(LIGHT_STREAM, layout::LIGHT_DIRECTION + 1), (1, 1));
         let vertex = |b, offset| layout::light_vertex(b) + offset;
         assert_eq!(at(LIGHT_STREAM, vertex(1, layout::DIRECTION + 1)), (3, 1));
-        assert_eq!(at(LIGHT_STREAM, vertex(2, layout::ROULETTE)), (6, 1));
-        assert_eq!(at(TECHNIQUE_STREAM, 4), (2, 0));
-        assert_eq!(at(TECHNIQUE_STREAM, 3), (3, 0));
+        assert_eq!(at(LIGHT_STREAM, vertex(1, layout::ROULETTE)), (4, 1));
+        assert_eq!(at(TECHNIQUE_STREAM, 1), (0, 0));
+        assert_eq!(at(TECHNIQUE_STREAM, 0), (1, 0));
     }
 
     /// The film positions of a pixel's first 2^m passes form a (0, m, 2)-net: one point in each
@@ -301,8 +326,14 @@ mod tests {
             }
             cells.iter().all(|&c| c == 1)
         };
-        assert!(single(CAMERA_STREAM, layout::camera_vertex(1) + layout::LOBE));
-        assert!(single(LIGHT_STREAM, layout::light_vertex(2) + layout::ROULETTE));
+        assert!(single(
+            CAMERA_STREAM,
+            layout::camera_vertex(1) + layout::LOBE
+        ));
+        assert!(single(
+            LIGHT_STREAM,
+            layout::light_vertex(1) + layout::ROULETTE
+        ));
         assert!(single(LIGHT_STREAM, layout::LIGHT_CHOICE));
         assert!(single(TECHNIQUE_STREAM, 0));
     }
