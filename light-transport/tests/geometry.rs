@@ -16,9 +16,10 @@ fn rel(a: DVec3, b: DVec3) -> f64 {
 
 /// The barycentrics of texture coordinates `uv` on triangle `t`.
 fn barycentrics_of_uv(t: &Triangle, uv: [f64; 2]) -> (f64, f64) {
-    let (du1, dv1) = (t.uv[1][0] - t.uv[0][0], t.uv[1][1] - t.uv[0][1]);
-    let (du2, dv2) = (t.uv[2][0] - t.uv[0][0], t.uv[2][1] - t.uv[0][1]);
-    let (a, b) = (uv[0] - t.uv[0][0], uv[1] - t.uv[0][1]);
+    let c = t.uv.map(|[u, v]| [f64::from(u), f64::from(v)]);
+    let (du1, dv1) = (c[1][0] - c[0][0], c[1][1] - c[0][1]);
+    let (du2, dv2) = (c[2][0] - c[0][0], c[2][1] - c[0][1]);
+    let (a, b) = (uv[0] - c[0][0], uv[1] - c[0][1]);
     let det = du1 * dv2 - dv1 * du2;
     ((a * dv2 - b * du2) / det, (b * du1 - a * dv1) / det)
 }
@@ -33,7 +34,7 @@ fn triangle_derivatives_match_finite_differences() {
     let mut worst = [0.0f64; 4];
     for _ in 0..2000 {
         let p = [0, 1, 2].map(|_| DVec3::new(r(), r(), r()) * 2.0 - 1.0);
-        let uv = [0, 1, 2].map(|_| [r() * 3.0, r() * 3.0]);
+        let uv = [0, 1, 2].map(|_| [r() as f32 * 3.0, r() as f32 * 3.0]);
         let t = Triangle {
             p,
             uv,

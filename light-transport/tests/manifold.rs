@@ -39,7 +39,7 @@ fn random_point(rng: &mut ChainRng) -> SurfacePoint {
         let p = [0, 1, 2].map(|_| base + r3(rng));
         let t = Triangle {
             p,
-            uv: [0, 1, 2].map(|_| [uniform(rng) * 2.0, uniform(rng) * 2.0]),
+            uv: [0, 1, 2].map(|_| [uniform(rng) as f32 * 2.0, uniform(rng) as f32 * 2.0]),
             flip: false,
             shading: NO_SHADING,
         };

@@ -6,6 +6,7 @@
 use crate::geometry::{Hit, Sphere, Triangle, TriangleShading};
 use crate::math::DVec3;
 use glam::Vec3A;
+mod convert;
 #[cfg(target_arch = "x86_64")]
 mod cpu;
 mod split;
@@ -13,7 +14,8 @@ mod split;
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
-use obvhs::cwbvh::{CwBvh, bvh2_to_cwbvh::bvh2_to_cwbvh};
+use obvhs::bvh2::{Bvh2, node::Bvh2Node};
+use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::PlocBuilder;
 use obvhs::ray::Ray as BvhRay;
 
@@ -95,25 +97,70 @@ impl Primitive {
     }
 }
 
-/// obvhs's CWBVH over `aabbs`: PLOC, reinsertion, conversion (obvhs's `build_cwbvh` with the
-/// medium preset), with the boxes dropped before the conversion, whose working memory is the
-/// largest of the build.
-fn build(aabbs: Vec<Aabb>, max_leaf: u32) -> CwBvh {
-    if aabbs.is_empty() {
+/// The boxes of a BVH's references, as the leaves obvhs's PLOC builder starts from: written
+/// straight into its working list, so that the boxes never exist twice (obvhs's `build` copies a
+/// list of boxes into that list).
+struct References {
+    leaves: Vec<Bvh2Node>,
+    total: Aabb,
+}
+
+impl References {
+    fn with_capacity(n: usize) -> Self {
+        Self {
+            leaves: Vec::with_capacity(n),
+            total: Aabb::empty(),
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.leaves.len()
+    }
+
+    /// Add reference `len()` with box `aabb`.
+    fn push(&mut self, aabb: Aabb) {
+        self.total.extend(aabb.min);
+        self.total.extend(aabb.max);
+        self.leaves
+            .push(Bvh2Node::new(aabb, 1, self.leaves.len() as u32));
+    }
+}
+
+/// A CWBVH over `references`: obvhs's `build_cwbvh` with the medium preset (PLOC, reinsertion,
+/// conversion), with leaves of at most `max_leaf` references, through our lean copy of obvhs's
+/// conversion ([`convert`]).
+fn build(references: References, max_leaf: u32) -> CwBvh {
+    if references.len() == 0 {
         return CwBvh::default();
     }
+    convert::to_cwbvh(&binary(references), max_leaf)
+}
+
+/// obvhs's binary BVH over `references` (not empty), one per leaf: PLOC and reinsertion with
+/// the medium preset, exactly as obvhs's `build_cwbvh` makes it.
+fn binary(references: References) -> Bvh2 {
     let params = BvhBuildParams::medium_build();
-    let indices = (0..aabbs.len() as u32).collect();
-    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+    let n = references.len();
+    let mut bvh2 = Bvh2::zeroed(n);
+    bvh2.reset_for_reuse(n, Some((0..n as u32).collect()));
+    let mut ploc = PlocBuilder {
+        current_nodes: references.leaves,
+        ..PlocBuilder::new()
+    };
+    // The medium preset's search distance.
+    debug_assert!(matches!(
         params.ploc_search_distance,
-        &aabbs,
-        indices,
+        obvhs::ploc::PlocSearchDistance::Medium
+    ));
+    ploc.build_ploc_from_leaves::<14, false>(
+        &mut bvh2,
+        references.total,
         params.sort_precision,
         params.search_depth_threshold,
     );
-    drop(aabbs);
+    drop(ploc);
     ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
-    bvh2_to_cwbvh(&bvh2, max_leaf, true, false)
+    bvh2
 }
 
 /// Reorder `items` in place so that `items[k]` becomes the old `items[order[k]]` (`order` a
@@ -283,7 +330,7 @@ impl Bvh {
         // mostly empty (`split`), one for two neighbours that fill a box together (`PAIR`);
         // `owner[r]` is the (first) primitive of reference `r`, flagged `PAIRED` for two.
         assert!(count < PAIRED as usize, "at most 2^31 primitives");
-        let (mut aabbs, mut owner) = (Vec::with_capacity(count), Vec::with_capacity(count));
+        let (mut refs, mut owner) = (References::with_capacity(count), Vec::with_capacity(count));
         let mut boxes = Vec::new();
         // The previous primitive, when it has one box and is not yet entered.
         let mut single: Option<(u32, (DVec3, DVec3))> = None;
@@ -297,29 +344,31 @@ impl Bvh {
                     let both = (b.0.min(c.0), b.1.max(c.1));
                     let area = |(lo, hi)| split::half_area(lo, hi);
                     if 2.0 * area(both) <= PAIR * (area(b) + area(c)) {
-                        aabbs.push(padded(both.0, both.1));
+                        refs.push(padded(both.0, both.1));
                         owner.push(j | PAIRED);
                         continue;
                     }
                 }
-                aabbs.push(padded(b.0, b.1));
+                refs.push(padded(b.0, b.1));
                 owner.push(j);
             }
             if let [c] = boxes[..] {
                 single = Some((i as u32, c));
             } else {
-                aabbs.extend(boxes.iter().map(|&(lo, hi)| padded(lo, hi)));
-                owner.resize(aabbs.len(), i as u32);
+                for &(lo, hi) in &boxes {
+                    refs.push(padded(lo, hi));
+                }
+                owner.resize(refs.len(), i as u32);
             }
         }
         if let Some((j, b)) = single {
-            aabbs.push(padded(b.0, b.1));
+            refs.push(padded(b.0, b.1));
             owner.push(j);
         }
         // A leaf holds up to three references, or one pair: leaves of two or three pairs made
         // rays 3–10% slower (on `door` and the terrain).
         let paired = owner.iter().any(|&o| o & PAIRED != 0);
-        let bvh = build(aabbs, if paired { 1 } else { 3 });
+        let bvh = build(refs, if paired { 1 } else { 3 });
         // Primitives are numbered by their first reference in leaf order, so traversal mostly
         // reads them sequentially (the two of a pair are never split, so they get consecutive
         // numbers).
@@ -595,6 +644,13 @@ mod tests {
     use super::*;
     use crate::geometry::NO_SHADING;
     use mcmc_core::rng::{stream, uniform};
+
+    /// A primitive takes 104 bytes (a triangle's f32 texture coordinates; the enum's tag lives in
+    /// a spare value of `flip`): a million-triangle mesh holds 25 MB less than at 128.
+    #[test]
+    fn primitives_are_104_bytes() {
+        assert_eq!(std::mem::size_of::<Primitive>(), 104);
+    }
 
     /// `permute` applies a permutation in place: `items[k]` becomes the old `items[order[k]]`, for
     /// random permutations of many cycle structures (and the identity and the empty list).

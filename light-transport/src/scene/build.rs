@@ -423,9 +423,10 @@ fn mesh_triangle(mesh: &MeshDesc, tri: [u32; 3]) -> Result<Triangle> {
     };
     let p = [get(tri[0])?, get(tri[1])?, get(tri[2])?];
     let uv = match &mesh.uvs {
-        Some(uvs) => {
-            [tri[0], tri[1], tri[2]].map(|i| uvs.get(i as usize).copied().unwrap_or([0.0, 0.0]))
-        }
+        Some(uvs) => [tri[0], tri[1], tri[2]].map(|i| {
+            let [u, v] = uvs.get(i as usize).copied().unwrap_or([0.0, 0.0]);
+            [u as f32, v as f32]
+        }),
         None => [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
     };
     Ok(Triangle {
