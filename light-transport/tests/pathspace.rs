@@ -387,10 +387,10 @@ impl Estimator for ErptWithoutMis {
             let e = state
                 .strategy_importance(0)
                 .max(state.strategy_importance(1));
-            let count = (e / self.0.quantum + uniform(&mut stream.rng)).floor() as u64;
+            let count = (e / self.0.quantum + uniform(stream.rng())).floor() as u64;
             for _ in 0..count {
                 let mut chain = Chain::with_density(state.clone(), 0.0).unwrap();
-                Mutations::run(&proposal, &mut chain, n, &mut stream.rng, &mut rec);
+                Mutations::run(&proposal, &mut chain, n, stream.rng(), &mut rec);
             }
         }
         Rgb::BLACK

@@ -130,7 +130,7 @@ impl Estimator for Bdpt {
         SUBPATHS.with(|b| {
             let (cam, light) = &mut *b.borrow_mut();
             self.trace_subpaths(scene, stream, Some(pixel), cam, light);
-            self.evaluate(scene, light, cam, splats, Some(&mut stream.rng))
+            self.evaluate(scene, light, cam, splats, Some(stream.rng()))
         })
     }
     fn splats(&self) -> bool {

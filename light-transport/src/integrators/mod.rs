@@ -315,7 +315,7 @@ mod tests {
             stream: &mut PixelStream,
             splats: &mut Vec<Splat>,
         ) -> Rgb {
-            let u = uniform(&mut stream.rng);
+            let u = uniform(stream.rng());
             if pixel.is_multiple_of(97) {
                 std::thread::sleep(Duration::from_micros(50 * (pixel % 7) as u64));
             }

@@ -88,7 +88,7 @@ impl Estimator for PathTracer {
             let u_light = stream.next_2d();
             if !bsdf.is_delta_only() {
                 let survive = |c: Rgb| match self.shadow_roulette {
-                    Some(r) => r.survive((beta * c).luminance(), &mut stream.rng),
+                    Some(r) => r.survive((beta * c).luminance(), stream.rng()),
                     None => Some(1.0),
                 };
                 l += beta

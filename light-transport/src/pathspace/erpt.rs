@@ -252,12 +252,12 @@ impl Estimator for Erpt {
             b: self.quantum / n as f64,
         };
         for (state, e) in seeds {
-            let count = (e / self.quantum + uniform(&mut stream.rng)).floor() as u64;
+            let count = (e / self.quantum + uniform(stream.rng())).floor() as u64;
             for _ in 0..count {
                 let Ok(mut chain) = Chain::with_density(state.clone(), 0.0) else {
                     continue;
                 };
-                Mutations::run(&proposal, &mut chain, n, &mut stream.rng, &mut rec);
+                Mutations::run(&proposal, &mut chain, n, stream.rng(), &mut rec);
                 stats.merge(&chain.stats);
                 chains += 1;
             }

@@ -398,7 +398,7 @@ impl Estimator for PhotonMapper {
         if cs.we == 0.0 {
             return Rgb::BLACK;
         }
-        let l = self.shade(scene, cs.ray, 0, &mut stream.rng);
+        let l = self.shade(scene, cs.ray, 0, stream.rng());
         if l.is_finite() { l } else { Rgb::BLACK }
     }
 

@@ -161,6 +161,11 @@ impl IndependentStream {
         }
     }
 
+    /// The current substream.
+    pub fn current(&self) -> usize {
+        self.current
+    }
+
     /// Reset positions for a new sample (numbers stay fresh).
     pub fn new_sample(&mut self) {
         self.pos = [0; STREAMS];

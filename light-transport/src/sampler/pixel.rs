@@ -31,7 +31,8 @@
 
 use super::sobol::Point;
 use super::{
-    CAMERA_BLOCK, CAMERA_STREAM, LIGHT_BLOCK, LIGHT_STREAM, STREAMS, SampleStream, VERTEX_BLOCK,
+    CAMERA_BLOCK, CAMERA_STREAM, IndependentStream, LIGHT_BLOCK, LIGHT_STREAM, STREAMS,
+    SampleStream, VERTEX_BLOCK,
 };
 use mcmc_core::ChainRng;
 use mcmc_core::rng::uniform;
@@ -69,12 +70,10 @@ pub const SOBOL_VERTICES: usize = 1;
 /// The numbers of one sample of one pixel in one pass ([`PixelStream::new`]).
 #[derive(Clone, Debug)]
 pub struct PixelStream {
-    /// Independent numbers: the whole stream for [`PixelSampler::Independent`], the low bits of
-    /// the Sobol numbers, and the estimator's own random choices (shadow-ray roulette, the
-    /// photon mapper's final gather).
-    pub rng: ChainRng,
-    current: usize,
-    pos: [usize; STREAMS],
+    /// Independent numbers and the positions of the substreams: the whole stream for
+    /// [`PixelSampler::Independent`], the low bits of the Sobol numbers, and the estimator's own
+    /// random choices ([`PixelStream::rng`]).
+    independent: IndependentStream,
     sobol: Option<SobolPoint>,
 }
 
@@ -169,23 +168,29 @@ impl PixelStream {
             sets: [[None; MAX_SETS]; STREAMS],
         });
         Self {
-            rng,
-            current: 0,
-            pos: [0; STREAMS],
+            independent: IndependentStream::new(rng),
             sobol,
         }
+    }
+
+    /// The generator of the independent numbers, for the estimator's own random choices
+    /// (shadow-ray roulette, the photon mapper's final gather).
+    pub fn rng(&mut self) -> &mut ChainRng {
+        &mut self.independent.rng
     }
 
     /// The Sobol number at position `p` of the current substream (below its
     /// [`SOBOL_POSITIONS`]).
     #[inline(never)]
     fn sobol_number(&mut self, p: usize) -> f64 {
-        let (Some(point), Some((set, lane))) = (&mut self.sobol, set_of(self.current, p)) else {
-            return uniform(&mut self.rng);
+        let current = self.independent.current();
+        let rng = &mut self.independent.rng;
+        let (Some(point), Some((set, lane))) = (&mut self.sobol, set_of(current, p)) else {
+            return uniform(rng);
         };
-        let high = u64::from(point.number(self.current, set, lane));
+        let high = u64::from(point.number(current, set, lane));
         // 32 bits of the point and 21 random ones: exactly representable, below 1.
-        let low = self.rng.next_u64() >> 43;
+        let low = rng.next_u64() >> 43;
         ((high << 21) | low) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
@@ -197,24 +202,24 @@ impl PixelStream {
 
 impl SampleStream for PixelStream {
     fn start_stream(&mut self, index: usize) {
-        self.current = index;
+        self.independent.start_stream(index);
     }
     #[inline]
     fn next_1d(&mut self) -> f64 {
-        let p = self.pos[self.current];
-        self.pos[self.current] += 1;
+        let p = self.independent.position();
         // Most numbers lie past the Sobol positions: one comparison sends them to the generator.
-        if self.sobol.is_some() && p < SOBOL_POSITIONS[self.current] {
+        if self.sobol.is_some() && p < SOBOL_POSITIONS[self.independent.current()] {
+            self.independent.seek(p + 1);
             self.sobol_number(p)
         } else {
-            uniform(&mut self.rng)
+            self.independent.next_1d()
         }
     }
     fn seek(&mut self, index: usize) {
-        self.pos[self.current] = index;
+        self.independent.seek(index);
     }
     fn position(&self) -> usize {
-        self.pos[self.current]
+        self.independent.position()
     }
 }
 
