@@ -33,12 +33,23 @@ new_bin=${NEW_BIN:-"$root/target/release/charted"} old_bin=${OLD_BIN:-"$old/targ
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
+# Equal work: builds that know --roulette (on by default since issue 17) render BDPT and PSSMLT
+# with it off, as builds before it did; roulette's gain is the estimator's, measured at equal time
+# (scripts/equal-time-variance.sh), not a faster sample.
+knows_roulette() { "$1" render --help 2>/dev/null | grep -q -- '--roulette <'; }
+old_rr=() new_rr=()
+knows_roulette "$old_bin" && old_rr=(--roulette 0)
+knows_roulette "$new_bin" && new_rr=(--roulette 0)
+
 # One run: prints "render-seconds peak-kilobytes".
 run() {
-  local bin=$1 scene=$2 algo=$3 n=$spp
+  local bin=$1 scene=$2 algo=$3 n=$spp extra=()
   [[ $algo == pt ]] && n=$((4 * spp))
+  if [[ $algo == bdpt || $algo == pssmlt ]]; then
+    if [[ $bin == "$old_bin" ]]; then extra=("${old_rr[@]}"); else extra=("${new_rr[@]}"); fi
+  fi
   /usr/bin/time -f '%M' -o "$out/mem" "$bin" render "$scene" --algo "$algo" --spp "$n" \
-    --resolution "$res" --max-depth "$depth" -o "$out/img.exr" > "$out/log" 2>&1 ||
+    --resolution "$res" --max-depth "$depth" "${extra[@]}" -o "$out/img.exr" > "$out/log" 2>&1 ||
     { cat "$out/log" >&2; return 1; }
   local t
   t=$(sed -nE 's/^time .*render ([0-9.]+) s.*/\1/p' "$out/log")

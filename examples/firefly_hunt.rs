@@ -1,0 +1,126 @@
+//! Where BDPT's variance comes from: renders a scene with BDPT (Veach 1997 ch. 10, all
+//! strategies, power heuristic) and keeps, per strategy `(s, t)`, the sum and the sum of squares
+//! of its weighted per-sample contributions (luminance), and the largest single contributions
+//! with the vertices that made them. A strategy whose share of the second moment far exceeds its
+//! share of the mean is where fireflies come from.
+//!
+//! `cargo run --release --example firefly_hunt [SCENE.pbrt|BUILT-IN] [SPP] [SEED]`
+//! (default `../shared/scenes/veach-bidir/scene.pbrt`, 256×144, maximum depth 7, 8 spp).
+
+use light_transport::integrators::Bdpt;
+use light_transport::path::{
+    MisHeuristic, Vertex, VertexKind, WalkSettings, connect_unoccluded, mis_weight, unoccluded,
+};
+use light_transport::sampler::{PixelSampler, PixelStream};
+use light_transport::scene::{Scene, builtin, pbrt};
+use std::collections::BTreeMap;
+
+#[derive(Default)]
+struct Moments {
+    sum: f64,
+    sum2: f64,
+    count: u64,
+}
+
+fn describe(v: &Vertex) -> String {
+    let kind = match v.kind {
+        VertexKind::Camera => "cam".to_string(),
+        VertexKind::Light { light } => format!("light{light}"),
+        VertexKind::Surface => format!("prim{}", v.point.primitive),
+    };
+    format!(
+        "{kind}{} pf={:.2e} pr={:.2e} b={:.2e}",
+        if v.delta { " delta" } else { "" },
+        v.pdf_fwd,
+        v.pdf_rev,
+        v.beta.luminance()
+    )
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let scene_arg = args
+        .next()
+        .unwrap_or_else(|| "../shared/scenes/veach-bidir/scene.pbrt".into());
+    let spp: u64 = args.next().map(|s| s.parse()).transpose()?.unwrap_or(8);
+    let seed: u64 = args.next().map(|s| s.parse()).transpose()?.unwrap_or(1);
+    let desc = match builtin::builtin(&scene_arg) {
+        Some(d) => d,
+        None => pbrt::load(std::path::Path::new(&scene_arg))?,
+    };
+    let scene = Scene::new(&desc, Some((256, 144)))?;
+    let bdpt = Bdpt {
+        walk: WalkSettings { max_edges: 8 },
+        heuristic: MisHeuristic::Power,
+        roulette: None,
+        shadow_roulette: None,
+    };
+    let npix = scene.camera.width * scene.camera.height;
+    let mut moments: BTreeMap<(usize, usize), Moments> = BTreeMap::new();
+    let mut top: Vec<(f64, String)> = Vec::new();
+    let (mut camera, mut light) = (Vec::new(), Vec::new());
+    for pass in 0..spp {
+        for pixel in 0..npix {
+            let rng = mcmc_core::rng::substream(seed, pass, pixel as u64);
+            let mut stream = PixelStream::new(PixelSampler::Independent, seed, pass, pixel, rng);
+            bdpt.trace_subpaths(&scene, &mut stream, Some(pixel), &mut camera, &mut light);
+            for t in 1..=camera.len() {
+                for s in 0..=light.len() {
+                    let edges = s + t - 1;
+                    if (s == 1 && t == 1) || edges < 1 || edges > bdpt.walk.max_edges {
+                        continue;
+                    }
+                    let Some(c) = connect_unoccluded(&scene, &light, &camera, s, t) else {
+                        continue;
+                    };
+                    if s > 0 && !unoccluded(&scene, &light[s - 1], &camera[t - 1]) {
+                        continue;
+                    }
+                    let w = mis_weight(&scene, &light, &camera, s, t, bdpt.heuristic);
+                    let y = c.value.luminance() * w;
+                    if !(y > 0.0) {
+                        continue;
+                    }
+                    let m = moments.entry((s, t)).or_default();
+                    m.sum += y;
+                    m.sum2 += y * y;
+                    m.count += 1;
+                    if top.len() < 25 || y > top[top.len() - 1].0 {
+                        let path: Vec<String> = light[..s]
+                            .iter()
+                            .chain(camera[..t].iter().rev())
+                            .map(describe)
+                            .collect();
+                        top.push((
+                            y,
+                            format!(
+                                "s={s} t={t} pixel={pixel} pass={pass} w={w:.3e} unweighted={:.3e}\n    {}",
+                                c.value.luminance(),
+                                path.join("\n    ")
+                            ),
+                        ));
+                        top.sort_by(|a, b| b.0.total_cmp(&a.0));
+                        top.truncate(25);
+                    }
+                }
+            }
+        }
+    }
+    let n = (spp * npix as u64) as f64;
+    let total: f64 = moments.values().map(|m| m.sum).sum();
+    let total2: f64 = moments.values().map(|m| m.sum2).sum();
+    println!("mean luminance per sample {:.4e}", total / n);
+    println!("| s | t | share of mean | share of second moment | count |");
+    for ((s, t), m) in &moments {
+        println!(
+            "| {s} | {t} | {:.4} | {:.4} | {} |",
+            m.sum / total,
+            m.sum2 / total2,
+            m.count
+        );
+    }
+    for (y, d) in &top {
+        println!("{y:.3e}  {d}");
+    }
+    Ok(())
+}
