@@ -12,11 +12,11 @@ use light_transport::scene::Scene;
 #[derive(Args, Debug, Clone)]
 pub struct BdptArgs {
     /// BDPT and PSSMLT: Russian roulette in the subpath walks from this vertex on (1 = the
-    /// first surface vertex; 0 = off, every walk runs to --max-depth). Default: BDPT 1 (light
-    /// walks), PSSMLT 0. At equal time light-walk roulette gave BDPT 0.79–1.03× the RMSE of none
-    /// on veach-bidir and the built-ins, PSSMLT 0.99–1.09× on caustic, ring and pool (README).
-    #[arg(long)]
-    pub roulette: Option<usize>,
+    /// first surface vertex, the default, in light walks; 0 = off, every walk runs to
+    /// --max-depth). At equal time light-walk roulette gave BDPT 0.79–1.03× and PSSMLT
+    /// 0.78–1.09× the RMSE of none on veach-bidir and the built-ins (README).
+    #[arg(long, default_value_t = DEFAULT_ROULETTE_FROM)]
+    pub roulette: usize,
     /// BDPT and PSSMLT: which walks --roulette stops: light subpaths only (the default; camera
     /// paths then keep the densities their MIS weights assume) or both (worse on caustic, ring
     /// and pool: PSSMLT 1.11–1.77× the RMSE of none).
@@ -42,7 +42,7 @@ pub const ENTRY: Entry = Entry {
     passes: true,
     build: |scene, c, a| {
         let mut b = bdpt(c);
-        b.roulette = roulette(&a.bdpt, BDPT_ROULETTE_FROM)?;
+        b.roulette = roulette(&a.bdpt)?;
         b.shadow_roulette = shadow_roulette(&a.bdpt, scene, &b)?;
         Ok(Box::new(Passes {
             sampler: c.pass_sampler(),
@@ -105,14 +105,13 @@ pub enum RouletteWalks {
     Light,
 }
 
-/// The first vertex at which BDPT's walks may stop when `--roulette` is not given (light walks
-/// only, unless `--roulette-walks both`); PSSMLT's default is off.
-pub const BDPT_ROULETTE_FROM: usize = 1;
+/// The first vertex at which the walks of BDPT and PSSMLT may stop when `--roulette` is not given
+/// (light walks only, unless `--roulette-walks both`).
+pub const DEFAULT_ROULETTE_FROM: usize = 1;
 
-/// The roulette of `--roulette` and `--roulette-walks` (`None` for 0); `default_from` is the
-/// algorithm's first stopping vertex when `--roulette` is not given (0: off).
-pub fn roulette(a: &BdptArgs, default_from: usize) -> Result<Option<Roulette>, CliError> {
-    let from = a.roulette.unwrap_or(default_from);
+/// The roulette of `--roulette` and `--roulette-walks` (`None` for 0).
+pub fn roulette(a: &BdptArgs) -> Result<Option<Roulette>, CliError> {
+    let from = a.roulette;
     if from == 0 && a.roulette_walks.is_some() {
         return Err(CliError::Usage(
             "--roulette-walks needs --roulette N ≥ 1 (the first vertex that may stop; 0 is off)"

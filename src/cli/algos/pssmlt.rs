@@ -13,7 +13,7 @@ pub const ENTRY: Entry = Entry {
     build: |_, c, a| {
         let m = &a.metropolis;
         let mut bdpt = super::bdpt::bdpt(c);
-        bdpt.roulette = super::bdpt::roulette(&a.bdpt, 0)?;
+        bdpt.roulette = super::bdpt::roulette(&a.bdpt)?;
         Ok(Box::new(Metropolis {
             method: Pssmlt {
                 bdpt,
