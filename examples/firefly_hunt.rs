@@ -4,14 +4,20 @@
 //! with the vertices that made them. A strategy whose share of the second moment far exceeds its
 //! share of the mean is where fireflies come from.
 //!
-//! `cargo run --release --example firefly_hunt [SCENE.pbrt|BUILT-IN] [SPP] [SEED]`
-//! (default `../shared/scenes/veach-bidir/scene.pbrt`, 256×144, maximum depth 7, 8 spp).
+//! `cargo run --release --example firefly_hunt [SCENE.pbrt|BUILT-IN] [PASSES] [SEED] [ROULETTE]`
+//! (default `../shared/scenes/veach-bidir/scene.pbrt`, 256×144, maximum depth 7, passes `8`
+//! (0..8; `A..B` for passes A to B−1), seed 1; ROULETTE `off`, `light` (default, as `charted
+//! render`) or `both`: Russian roulette from the first surface vertex in light walks or in both).
+//! Each sample draws exactly the numbers it draws in `charted render SCENE --algo bdpt --seed SEED
+//! --resolution 256x144 --max-depth 7` (Sobol numbers), so a firefly seen in a render can be found
+//! by bisecting its pass count and replayed here.
 
-use light_transport::integrators::Bdpt;
+use light_transport::integrators::{Bdpt, Sampling, pass_stream};
 use light_transport::path::{
-    MisHeuristic, Vertex, VertexKind, WalkSettings, connect_unoccluded, mis_weight, unoccluded,
+    MisHeuristic, Roulette, Vertex, VertexKind, WalkSettings, connect_unoccluded, mis_weight,
+    unoccluded,
 };
-use light_transport::sampler::{PixelSampler, PixelStream};
+use light_transport::sampler::PixelSampler;
 use light_transport::scene::{Scene, builtin, pbrt};
 use std::collections::BTreeMap;
 
@@ -42,8 +48,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let scene_arg = args
         .next()
         .unwrap_or_else(|| "../shared/scenes/veach-bidir/scene.pbrt".into());
-    let spp: u64 = args.next().map(|s| s.parse()).transpose()?.unwrap_or(8);
+    let passes = args.next().unwrap_or_else(|| "8".into());
+    let passes: std::ops::Range<u64> = match passes.split_once("..") {
+        Some((a, b)) => a.parse()?..b.parse()?,
+        None => 0..passes.parse()?,
+    };
     let seed: u64 = args.next().map(|s| s.parse()).transpose()?.unwrap_or(1);
+    let roulette = match args.next().as_deref() {
+        Some("off") => None,
+        None | Some("light") => Some(Roulette {
+            from: 1,
+            camera: false,
+        }),
+        Some("both") => Some(Roulette {
+            from: 1,
+            camera: true,
+        }),
+        Some(other) => {
+            return Err(format!("ROULETTE must be off, light or both, not {other}").into());
+        }
+    };
     let desc = match builtin::builtin(&scene_arg) {
         Some(d) => d,
         None => pbrt::load(std::path::Path::new(&scene_arg))?,
@@ -52,17 +76,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let bdpt = Bdpt {
         walk: WalkSettings { max_edges: 8 },
         heuristic: MisHeuristic::Power,
-        roulette: None,
+        roulette,
         shadow_roulette: None,
     };
     let npix = scene.camera.width * scene.camera.height;
     let mut moments: BTreeMap<(usize, usize), Moments> = BTreeMap::new();
     let mut top: Vec<(f64, String)> = Vec::new();
     let (mut camera, mut light) = (Vec::new(), Vec::new());
-    for pass in 0..spp {
+    let sampling = Sampling {
+        seed,
+        sampler: PixelSampler::Sobol,
+    };
+    for pass in passes.clone() {
         for pixel in 0..npix {
-            let rng = mcmc_core::rng::substream(seed, pass, pixel as u64);
-            let mut stream = PixelStream::new(PixelSampler::Independent, seed, pass, pixel, rng);
+            let mut stream = pass_stream(sampling, pass, pixel);
             bdpt.trace_subpaths(&scene, &mut stream, Some(pixel), &mut camera, &mut light);
             for t in 1..=camera.len() {
                 for s in 0..=light.len() {
@@ -106,7 +133,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
-    let n = (spp * npix as u64) as f64;
+    let n = ((passes.end - passes.start) * npix as u64) as f64;
     let total: f64 = moments.values().map(|m| m.sum).sum();
     let total2: f64 = moments.values().map(|m| m.sum2).sum();
     println!("mean luminance per sample {:.4e}", total / n);

@@ -182,6 +182,19 @@ pub fn render<E: Estimator>(
     (film, stats)
 }
 
+/// The stream of `pixel`'s sample in pass `pass` of a render with `sampling`, exactly as [`pass`]
+/// hands it to the estimator (so a tool can replay one sample of a render).
+pub fn pass_stream(sampling: Sampling, pass: u64, pixel: usize) -> PixelStream {
+    let key = pass_key(sampling.seed, pass);
+    let rng = mcmc_core::rng::substream(key, PASS_PURPOSE, pixel as u64);
+    PixelStream::new(sampling.sampler, sampling.seed, pass, pixel, rng)
+}
+
+/// The key of pass `pass`'s per-pixel generators.
+fn pass_key(seed: u64, pass: u64) -> u64 {
+    seed ^ pass.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+}
+
 /// One pass of `estimator` into `film`: every pixel with probability `q` (all of them when
 /// `q ≥ 1`), its splats counted as `q` of a pass (see the module docs). Returns the samples taken
 /// and adds the rays traced to `rays`. Deterministic in `(sampling, pass)`, whatever the thread
@@ -204,8 +217,8 @@ pub fn pass<E: Estimator>(
     let npix = scene.camera.width * scene.camera.height;
     let chunk = npix.div_ceil(CHUNKS);
     let q = q.clamp(0.0, 1.0);
-    let Sampling { seed, sampler } = sampling.into();
-    let key = seed ^ pass.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let sampling = sampling.into();
+    let key = pass_key(sampling.seed, pass);
     let run = |c: usize| -> ChunkResult {
         crate::accel::take_ray_count();
         let lo = (c * chunk).min(npix);
@@ -222,8 +235,7 @@ pub fn pass<E: Estimator>(
             {
                 continue;
             }
-            let rng = mcmc_core::rng::substream(key, PASS_PURPOSE, pixel as u64);
-            let mut stream = PixelStream::new(sampler, seed, pass, pixel, rng);
+            let mut stream = pass_stream(sampling, pass, pixel);
             let v = estimator.sample(scene, pixel, &mut stream, &mut splats);
             samples.push((pixel, v));
         }
