@@ -111,15 +111,14 @@ pub const DEFAULT_ROULETTE_FROM: usize = 1;
 
 /// The roulette of `--roulette` and `--roulette-walks` (`None` for 0).
 pub fn roulette(a: &BdptArgs) -> Result<Option<Roulette>, CliError> {
-    let from = a.roulette;
-    if from == 0 && a.roulette_walks.is_some() {
+    if a.roulette == 0 && a.roulette_walks.is_some() {
         return Err(CliError::Usage(
             "--roulette-walks needs --roulette N ≥ 1 (the first vertex that may stop; 0 is off)"
                 .into(),
         ));
     }
-    Ok((from > 0).then_some(Roulette {
-        from,
+    Ok((a.roulette > 0).then_some(Roulette {
+        from: a.roulette,
         camera: a.roulette_walks == Some(RouletteWalks::Both),
     }))
 }
