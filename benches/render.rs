@@ -184,7 +184,7 @@ fn integrator_benches(c: &mut Criterion) {
     let pt = PathTracer {
         max_edges: 9,
         heuristic: MisHeuristic::Power,
-        roulette_after: None,
+        roulette_from: None,
         shadow_roulette: None,
     };
     let bdpt = Bdpt {

@@ -13,10 +13,7 @@
 //! by bisecting its pass count and replayed here.
 
 use light_transport::integrators::{Bdpt, Sampling, pass_stream};
-use light_transport::path::{
-    MisHeuristic, Roulette, Vertex, VertexKind, WalkSettings, connect_unoccluded, mis_weight,
-    unoccluded,
-};
+use light_transport::path::{MisHeuristic, Roulette, Vertex, VertexKind, WalkSettings};
 use light_transport::sampler::PixelSampler;
 use light_transport::scene::{Scene, builtin, pbrt};
 use std::collections::BTreeMap;
@@ -91,46 +88,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for pixel in 0..npix {
             let mut stream = pass_stream(sampling, pass, pixel);
             bdpt.trace_subpaths(&scene, &mut stream, Some(pixel), &mut camera, &mut light);
-            for t in 1..=camera.len() {
-                for s in 0..=light.len() {
-                    let edges = s + t - 1;
-                    if (s == 1 && t == 1) || edges < 1 || edges > bdpt.walk.max_edges {
-                        continue;
-                    }
-                    let Some(c) = connect_unoccluded(&scene, &light, &camera, s, t) else {
-                        continue;
-                    };
-                    if s > 0 && !unoccluded(&scene, &light[s - 1], &camera[t - 1]) {
-                        continue;
-                    }
-                    let w = mis_weight(&scene, &light, &camera, s, t, bdpt.heuristic);
-                    let y = c.value.luminance() * w;
-                    if !(y > 0.0) {
-                        continue;
-                    }
-                    let m = moments.entry((s, t)).or_default();
-                    m.sum += y;
-                    m.sum2 += y * y;
-                    m.count += 1;
-                    if top.len() < 25 || y > top[top.len() - 1].0 {
-                        let path: Vec<String> = light[..s]
-                            .iter()
-                            .chain(camera[..t].iter().rev())
-                            .map(describe)
-                            .collect();
-                        top.push((
-                            y,
-                            format!(
-                                "s={s} t={t} pixel={pixel} pass={pass} w={w:.3e} unweighted={:.3e}\n    {}",
-                                c.value.luminance(),
-                                path.join("\n    ")
-                            ),
-                        ));
-                        top.sort_by(|a, b| b.0.total_cmp(&a.0));
-                        top.truncate(25);
-                    }
+            bdpt.strategies(&scene, &light, &camera, None, |c| {
+                let (s, t, w) = (c.s, c.t, c.weight);
+                let y = c.value.luminance();
+                if !(y > 0.0) {
+                    return;
                 }
-            }
+                let m = moments.entry((s, t)).or_default();
+                m.sum += y;
+                m.sum2 += y * y;
+                m.count += 1;
+                if top.len() < 25 || y > top[top.len() - 1].0 {
+                    let path: Vec<String> = light[..s]
+                        .iter()
+                        .chain(camera[..t].iter().rev())
+                        .map(describe)
+                        .collect();
+                    top.push((
+                        y,
+                        format!(
+                            "s={s} t={t} pixel={pixel} pass={pass} w={w:.3e} unweighted={:.3e}\n    {}",
+                            c.unweighted.luminance(),
+                            path.join("\n    ")
+                        ),
+                    ));
+                    top.sort_by(|a, b| b.0.total_cmp(&a.0));
+                    top.truncate(25);
+                }
+            });
         }
     }
     let n = ((passes.end - passes.start) * npix as u64) as f64;

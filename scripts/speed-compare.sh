@@ -33,7 +33,7 @@ new_bin=${NEW_BIN:-"$root/target/release/charted"} old_bin=${OLD_BIN:-"$old/targ
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
-# Equal work: builds that know --roulette (on by default since issue 17) render BDPT and PSSMLT
+# Equal work: builds that know --roulette (on by default since issue 17) render PT, BDPT and PSSMLT
 # with it off, as builds before it did; roulette's gain is the estimator's, measured at equal time
 # (scripts/equal-time-variance.sh), not a faster sample.
 knows_roulette() { "$1" render --help 2>/dev/null | grep -q -- '--roulette <'; }
@@ -45,7 +45,7 @@ knows_roulette "$new_bin" && new_rr=(--roulette 0)
 run() {
   local bin=$1 scene=$2 algo=$3 n=$spp extra=()
   [[ $algo == pt ]] && n=$((4 * spp))
-  if [[ $algo == bdpt || $algo == pssmlt ]]; then
+  if [[ $algo == pt || $algo == bdpt || $algo == pssmlt ]]; then
     if [[ $bin == "$old_bin" ]]; then extra=("${old_rr[@]}"); else extra=("${new_rr[@]}"); fi
   fi
   /usr/bin/time -f '%M' -o "$out/mem" "$bin" render "$scene" --algo "$algo" --spp "$n" \

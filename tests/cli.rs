@@ -214,6 +214,19 @@ fn every_subcommand_runs_on_a_tiny_image() {
         let (ok, _, e) = render_cornell(algo, "8x8", &extra, &o("walks-bad.exr"));
         assert!(!ok && e.contains("needs --roulette"), "{algo}: {e}");
     }
+    // Path tracing's roulette is off unless --roulette N ≥ 1 asks for it; it is reported, and
+    // --roulette-walks (BDPT and PSSMLT only) is an error.
+    let (ok, out, e) = render_cornell("pt", "24x16", &[], &o("pt-walks.exr"));
+    assert!(ok && !out.contains("roulette  "), "pt default: {out}{e}");
+    let (ok, out, e) = render_cornell("pt", "24x16", &["--roulette", "3"], &o("pt-walks.exr"));
+    let line = "roulette   paths may stop from vertex 3 on";
+    assert!(ok && out.contains(line), "pt --roulette 3: {out}{e}");
+    let extra = ["--roulette", "1", "--roulette-walks", "both"];
+    let (ok, _, e) = render_cornell("pt", "8x8", &extra, &o("pt-walks-bad.exr"));
+    assert!(
+        !ok && e.contains("camera walks only"),
+        "pt --roulette-walks: {e}"
+    );
     // Russian roulette on shadow rays (PT and BDPT) is reported; a bad fraction is an error.
     for algo in ["pt", "bdpt"] {
         let flag = "--shadow-roulette";

@@ -1829,3 +1829,56 @@ fn classification_for_manifold_exploration() {
         .expect("defined");
     assert!((m - fr.n).length() < 1e-9, "{m:?}");
 }
+
+/// `Bsdf::radiance_compression` is the ratio of a transmission's value in radiance transport to
+/// its value in importance transport (what Russian roulette divides out of a camera path's
+/// throughput), for smooth and rough glass seen from either side; 1 for reflections and for
+/// BSDFs without a dielectric lobe.
+#[test]
+fn radiance_compression_is_the_ratio_of_radiance_to_importance_transport() {
+    let mut checked = 0;
+    for (materials, wos) in [
+        (
+            vec![glass(1.5, 0.0, 0.0)],
+            vec![normal(), oblique(), below()],
+        ),
+        (
+            vec![glass(1.33, 0.3, 0.3)],
+            vec![normal(), oblique(), below()],
+        ),
+        (vec![matte(0.7)], vec![oblique()]),
+    ] {
+        let b = build(&materials, 0, [0.0; 2]);
+        let fr = b.frame;
+        for wo in wos {
+            let wo = fr.to_world(wo);
+            for k in 0..64 {
+                let (u_lobe, u) = ((k as f64 + 0.5) / 64.0, [0.37, (k as f64 * 0.618) % 1.0]);
+                let Some(s) = b.sample(wo, u_lobe, u, TransportMode::Radiance) else {
+                    continue;
+                };
+                let f_importance = if s.delta {
+                    b.eval_delta(wo, s.wi, TransportMode::Importance)
+                        .expect("the same delta lobe")
+                        .f
+                } else {
+                    b.eval(wo, s.wi, TransportMode::Importance)
+                };
+                let ratio = s.f[0] / f_importance[0];
+                let c = b.radiance_compression(wo, s.wi);
+                let transmits = wo.dot(b.ng) * s.wi.dot(b.ng) < 0.0;
+                assert!(
+                    (ratio - c).abs() < 1e-9 * c,
+                    "{materials:?}: f ratio {ratio}, compression {c}"
+                );
+                assert_eq!(
+                    transmits,
+                    c != 1.0,
+                    "{materials:?}: transmission {transmits}, compression {c}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 300, "{checked} samples checked");
+}

@@ -56,7 +56,7 @@ fn a_fractional_last_pass_is_unbiased() {
     let pt = PathTracer {
         max_edges: MAX_EDGES,
         heuristic: MisHeuristic::Power,
-        roulette_after: None,
+        roulette_from: None,
         shadow_roulette: None,
     };
     let p_lt = min_p(

@@ -460,6 +460,24 @@ impl Bsdf {
         s
     }
 
+    /// The factor by which radiance transport ([`TransportMode::Radiance`]) scales the value of
+    /// a transmission from `wo` to `wi`: `1/η²` with `η` the relative index seen from `wo`
+    /// ([`dielectric::transmission_scale`]); 1 for a reflection or without a dielectric lobe.
+    /// Russian roulette divides it out of the throughput it looks at (pbrt's `etaScale`), so a
+    /// camera path inside glass does not stop more often than outside.
+    pub fn radiance_compression(&self, wo: DVec3, wi: DVec3) -> f64 {
+        let (Some(eta), Some(lo), Some(li)) =
+            (self.eta(), local(&self.frame, wo), local(&self.frame, wi))
+        else {
+            return 1.0;
+        };
+        if lobes::same_side(lo, li) {
+            return 1.0;
+        }
+        let (_, _, eta) = dielectric::orient(lo, eta);
+        dielectric::transmission_scale(eta, TransportMode::Radiance)
+    }
+
     /// Index of refraction (inside over outside) of the first dielectric lobe.
     pub fn eta(&self) -> Option<f64> {
         self.lobes.as_slice().iter().find_map(|l| match l.kind {

@@ -76,9 +76,28 @@ impl Bdpt {
         light: &[Vertex],
         camera: &[Vertex],
         splats: &mut Vec<Splat>,
-        mut rng: Option<&mut ChainRng>,
+        rng: Option<&mut ChainRng>,
     ) -> Rgb {
         let mut l = Rgb::BLACK;
+        self.strategies(scene, light, camera, rng, |c| match c.raster {
+            Some(r) => splats.push((r, c.value)),
+            None => l += c.value,
+        });
+        l
+    }
+
+    /// Every strategy of a pair of subpaths with a nonzero contribution, in the order
+    /// [`Bdpt::evaluate`] sums them, handed to `visit` (for per-strategy statistics, as
+    /// `examples/firefly_hunt.rs` gathers them). `rng` as in [`Bdpt::evaluate`].
+    #[inline(always)]
+    pub fn strategies(
+        &self,
+        scene: &Scene,
+        light: &[Vertex],
+        camera: &[Vertex],
+        mut rng: Option<&mut ChainRng>,
+        mut visit: impl FnMut(Strategy),
+    ) {
         for t in 1..=camera.len() {
             for s in 0..=light.len() {
                 let edges = s + t - 1;
@@ -104,19 +123,39 @@ impl Bdpt {
                         continue;
                     }
                 }
-                let w = mis_weight(scene, light, camera, s, t, self.heuristic);
-                if w == 0.0 {
+                let weight = mis_weight(scene, light, camera, s, t, self.heuristic);
+                if weight == 0.0 {
                     continue;
                 }
-                let value = c.value * (w * boost);
-                match c.raster {
-                    Some(r) => splats.push((r, value)),
-                    None => l += value,
-                }
+                visit(Strategy {
+                    s,
+                    t,
+                    raster: c.raster,
+                    unweighted: c.value,
+                    weight,
+                    value: c.value * (weight * boost),
+                });
             }
         }
-        l
     }
+}
+
+/// One strategy's contribution to a BDPT sample ([`Bdpt::strategies`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Strategy {
+    /// Light subpath vertices it uses.
+    pub s: usize,
+    /// Camera subpath vertices it uses.
+    pub t: usize,
+    /// Raster position for `t = 1` (splatted); `None`: the sample's own pixel.
+    pub raster: Option<[f64; 2]>,
+    /// Contribution over density, before the MIS weight.
+    pub unweighted: Rgb,
+    /// MIS weight.
+    pub weight: f64,
+    /// What the estimate adds: `unweighted · weight`, divided by the shadow-ray roulette's
+    /// survival probability where it ran.
+    pub value: Rgb,
 }
 
 impl Estimator for Bdpt {

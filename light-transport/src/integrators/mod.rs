@@ -23,7 +23,7 @@ mod lt;
 mod pt;
 pub mod shadow_roulette;
 
-pub use bdpt::Bdpt;
+pub use bdpt::{Bdpt, Strategy};
 pub use lt::LightTracer;
 pub use pt::PathTracer;
 pub use shadow_roulette::{ShadowRoulette, mean_luminance};

@@ -1,14 +1,15 @@
 //! Path tracing with next-event estimation, combining BSDF and light sampling of emitters by MIS
-//! (Veach & Guibas 1995), with optional Russian roulette on the path and on the shadow rays of
-//! next-event estimation ([`super::shadow_roulette`]). Written independently of the
-//! bidirectional path machinery so the two check each other.
+//! (Veach & Guibas 1995), with optional Russian roulette on the path (the subpath walks' rule,
+//! [`Roulette::continuation`]) and on the shadow rays of next-event estimation
+//! ([`super::shadow_roulette`]). Written independently of the bidirectional path machinery so the
+//! two check each other.
 
 use super::direct::{mis, next_event};
 use super::shadow_roulette::ShadowRoulette;
 use super::{Estimator, Splat};
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, offset_origin};
-use crate::path::{MisHeuristic, camera_ray};
+use crate::path::{MisHeuristic, Roulette, camera_ray};
 use crate::sampler::{CAMERA_STREAM, PixelStream, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -20,8 +21,12 @@ pub struct PathTracer {
     pub max_edges: usize,
     /// MIS heuristic for emitters.
     pub heuristic: MisHeuristic,
-    /// Start Russian roulette after this many bounces (`None`: never).
-    pub roulette_after: Option<usize>,
+    /// Russian roulette from this vertex of the path on (1: the first surface vertex; `None`:
+    /// every path runs to `max_edges`). At vertex `b` the path continues with the probability
+    /// [`Roulette::continuation`] of its throughput without the radiance compression of its
+    /// refractions ([`crate::bsdf::Bsdf::radiance_compression`]), read from the vertex block's
+    /// roulette number.
+    pub roulette_from: Option<usize>,
     /// Russian roulette on the shadow rays of next-event contributions below its threshold
     /// (`None`: every shadow ray is traced).
     pub shadow_roulette: Option<ShadowRoulette>,
@@ -29,12 +34,12 @@ pub struct PathTracer {
 
 impl Default for PathTracer {
     /// Paths of up to 9 edges (pbrt's default `maxdepth` 8), power heuristic, no Russian
-    /// roulette.
+    /// roulette (the CLI's default differs: `charted render --algo pt --help`).
     fn default() -> Self {
         Self {
             max_edges: 9,
             heuristic: MisHeuristic::Power,
-            roulette_after: None,
+            roulette_from: None,
             shadow_roulette: None,
         }
     }
@@ -57,6 +62,9 @@ impl Estimator for PathTracer {
         let mut l = Rgb::BLACK;
         let mut last_pdf = 0.0;
         let mut specular = true;
+        // The radiance compression of the refractions so far, divided out of the throughput
+        // that Russian roulette looks at ([`crate::bsdf::Bsdf::radiance_compression`]).
+        let mut compression = 1.0;
         for bounces in 0..self.max_edges {
             let Some(hit) = scene.intersect(&ray) else {
                 break;
@@ -112,8 +120,16 @@ impl Estimator for PathTracer {
             let u_lobe = stream.next_1d();
             stream.seek(block + layout::DIRECTION);
             let u = stream.next_2d();
-            stream.seek(block + layout::ROULETTE);
-            let rr = stream.next_1d();
+            if let Some(from) = self.roulette_from
+                && bounces + 1 >= from
+            {
+                stream.seek(block + layout::ROULETTE);
+                let q = Roulette::continuation(beta / compression, Rgb::WHITE);
+                if !(stream.next_1d() < q) {
+                    break;
+                }
+                beta = beta / q;
+            }
             let Some(bs) = bsdf.sample(wo, u_lobe, u, TransportMode::Radiance) else {
                 break;
             };
@@ -121,17 +137,11 @@ impl Estimator for PathTracer {
                 break;
             }
             beta *= bs.f * (bs.wi.dot(p.ns).abs() / bs.pdf);
+            if self.roulette_from.is_some() {
+                compression *= bsdf.radiance_compression(wo, bs.wi);
+            }
             specular = bs.delta;
             last_pdf = bs.pdf;
-            if let Some(after) = self.roulette_after
-                && bounces >= after
-            {
-                let q = (1.0 - beta.max_component()).max(0.05);
-                if rr < q {
-                    break;
-                }
-                beta = beta / (1.0 - q);
-            }
             if !beta.is_finite() {
                 break;
             }

@@ -11,12 +11,13 @@ use light_transport::scene::Scene;
 /// Options of bidirectional path tracing (bdpt).
 #[derive(Args, Debug, Clone)]
 pub struct BdptArgs {
-    /// BDPT and PSSMLT: Russian roulette in the subpath walks from this vertex on (1 = the
-    /// first surface vertex, the default, in light walks; 0 = off, every walk runs to
-    /// --max-depth). At equal time light-walk roulette gave BDPT 0.79–1.03× and PSSMLT
-    /// 0.78–1.09× the RMSE of none on veach-bidir and the built-ins (README).
-    #[arg(long, default_value_t = DEFAULT_ROULETTE_FROM)]
-    pub roulette: usize,
+    /// BDPT, PSSMLT and PT: Russian roulette in the walks from this vertex on (1 = the first
+    /// surface vertex; 0 = off, every walk runs to --max-depth). Default: 1 in the light walks
+    /// of BDPT and PSSMLT (at equal time 0.79–1.03× and 0.78–1.09× the RMSE of none on
+    /// veach-bidir and the built-ins), off for PT (from vertex 3: 0.77× on door, 0.99–1.06×
+    /// elsewhere; README).
+    #[arg(long)]
+    pub roulette: Option<usize>,
     /// BDPT and PSSMLT: which walks --roulette stops: light subpaths only (the default; camera
     /// paths then keep the densities their MIS weights assume) or both (worse on caustic, ring
     /// and pool: PSSMLT 1.11–1.77× the RMSE of none).
@@ -111,16 +112,29 @@ pub const DEFAULT_ROULETTE_FROM: usize = 1;
 
 /// The roulette of `--roulette` and `--roulette-walks` (`None` for 0).
 pub fn roulette(a: &BdptArgs) -> Result<Option<Roulette>, CliError> {
-    if a.roulette == 0 && a.roulette_walks.is_some() {
+    let from = a.roulette.unwrap_or(DEFAULT_ROULETTE_FROM);
+    if from == 0 && a.roulette_walks.is_some() {
         return Err(CliError::Usage(
             "--roulette-walks needs --roulette N ≥ 1 (the first vertex that may stop; 0 is off)"
                 .into(),
         ));
     }
-    Ok((a.roulette > 0).then_some(Roulette {
-        from: a.roulette,
+    Ok((from > 0).then_some(Roulette {
+        from,
         camera: a.roulette_walks == Some(RouletteWalks::Both),
     }))
+}
+
+/// Path tracing's roulette of `--roulette` (`None` for 0 or none given): the first vertex at
+/// which a path may stop. `--roulette-walks` is an error: a path tracer has camera walks only.
+pub fn path_roulette(a: &BdptArgs) -> Result<Option<usize>, CliError> {
+    if a.roulette_walks.is_some() {
+        return Err(CliError::Usage(
+            "--roulette-walks applies to bdpt and pssmlt: a path tracer has camera walks only"
+                .into(),
+        ));
+    }
+    Ok(a.roulette.filter(|&from| from > 0))
 }
 
 /// BDPT with the common options (also the evaluator of PSSMLT), without roulette.
