@@ -34,7 +34,7 @@ pub struct PathTracer {
 
 impl Default for PathTracer {
     /// Paths of up to 9 edges (pbrt's default `maxdepth` 8), power heuristic, no Russian
-    /// roulette (the CLI's default differs: `charted render --algo pt --help`).
+    /// roulette (as the CLI's default).
     fn default() -> Self {
         Self {
             max_edges: 9,

@@ -59,8 +59,9 @@ pub const ROULETTE_FLOOR: f64 = 0.5;
 /// by `q`. `β_b / β_1` is the subpath's throughput since its first surface vertex, so a light
 /// subpath's emitted power does not enter; in camera walks the radiance compression of
 /// refractions is divided out of it ([`crate::bsdf::Bsdf::radiance_compression`], pbrt's
-/// `etaScale`), so that a path does not stop more often inside glass or water. The floor bounds a survivor's `1/q` boost: without it,
-/// one of four 20 s renders of `veach-bidir` had a firefly (RMSE 1.36 instead of 0.072).
+/// `etaScale`), so that a path does not stop more often inside glass or water. The floor bounds
+/// a survivor's `1/q` boost: without it, one of four 20 s renders of `veach-bidir` had a firefly
+/// (RMSE 1.36 instead of 0.072).
 ///
 /// The decision is a function of the sample stream, so replaying a stream replays it. Estimators
 /// stay unbiased whatever their MIS weights, as long as those sum to one over the strategies of a
