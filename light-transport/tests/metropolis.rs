@@ -325,3 +325,64 @@ fn mismatched_importance_is_caught() {
         "the mismatched importance was not caught (p = {p:.2e})"
     );
 }
+
+/// The bootstrap's weights, computed in per-thread storage that each sample reuses
+/// (`Method::independent_weight`), are bit for bit those of the independent samples the seeding
+/// replays (`Method::independent`), for PSSMLT (with and without roulette), MMLT and path-space
+/// MLT, on every built-in scene, with samples of different path lengths interleaved so that each
+/// reuse starts from another sample's leftovers. The test of the test, run by hand: with
+/// `PrimarySample::reset` keeping the old coordinates, PSSMLT's second sample differs.
+#[test]
+fn bootstrap_weights_in_reused_storage_equal_fresh_samples() {
+    let mmlt = Mmlt {
+        walk: WalkSettings {
+            max_edges: MAX_EDGES,
+        },
+        heuristic: MisHeuristic::Power,
+        kelemen: Kelemen::default(),
+        importance: ImportanceKind::Luminance,
+    };
+    let mut with_roulette = pssmlt(ImportanceKind::Luminance);
+    with_roulette.bdpt.roulette = Some(Roulette {
+        from: 1,
+        camera: true,
+    });
+    let mlt = light_transport::pathspace::PathMlt::new(light_transport::pathspace::Mutations::new(
+        MAX_EDGES,
+    ))
+    .unwrap();
+    fn check<M: Method>(method: &M, scene: &Scene, what: &str) -> usize {
+        let mut nonzero = 0;
+        for i in 0..2000u64 {
+            let g = (i as usize * 7) % method.groups();
+            let seed = 0x5EED ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            let reused = method.independent_weight(scene, g, seed);
+            let fresh = method.independent(scene, g, seed).1;
+            assert_eq!(
+                reused.to_bits(),
+                fresh.to_bits(),
+                "{what}: group {g}, sample {i}"
+            );
+            nonzero += (fresh > 0.0) as usize;
+        }
+        nonzero
+    }
+    let mut total = [0; 4];
+    for name in builtin::BUILTIN {
+        let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((W, H))).unwrap();
+        let n = [
+            check(&pssmlt(ImportanceKind::Luminance), &scene, "pssmlt"),
+            check(&with_roulette, &scene, "pssmlt with roulette"),
+            check(&mmlt, &scene, "mmlt"),
+            check(&mlt, &scene, "path-space mlt"),
+        ];
+        println!("{name}: nonzero weights {n:?} of 2000 each");
+        for (t, k) in total.iter_mut().zip(n) {
+            *t += k;
+        }
+    }
+    assert!(
+        total.iter().all(|&k| k > 500),
+        "too few samples carry light to compare: {total:?}"
+    );
+}

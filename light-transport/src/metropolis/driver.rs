@@ -28,6 +28,11 @@ pub trait Method: Sync {
     /// weight `I / q` (0 when it carries nothing). Must be a deterministic function of
     /// `(g, seed)`: the driver replays seeds this way and checks the weight.
     fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (Self::State, f64);
+    /// The weight of [`Method::independent`]`(scene, g, seed)` alone, for the bootstrap, which
+    /// keeps no state: a method may compute it in storage it reuses (it must be the same number).
+    fn independent_weight(&self, scene: &Scene, g: usize, seed: u64) -> f64 {
+        self.independent(scene, g, seed).1
+    }
     /// `ln π(state)`: the log density of the chain's target at a state, as the kernel of
     /// [`Method::mutate`] evaluates it (chains start with it).
     fn ln_density(&self, scene: &Scene, state: &Self::State) -> f64;
@@ -279,7 +284,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
         .into_par_iter()
         .map(|j| {
             let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
-            method.independent(scene, g, key(settings.seed, g, i)).1
+            method.independent_weight(scene, g, key(settings.seed, g, i))
         })
         .collect();
     for wgt in &mut weights {

@@ -92,6 +92,12 @@ impl Method for Mmlt {
         (s, w)
     }
 
+    fn independent_weight(&self, scene: &Scene, g: usize, seed: u64) -> f64 {
+        super::pssmlt::bootstrap_weight(self.kelemen, seed, g + 1, |s| {
+            self.evaluate(scene, g + 1, s)
+        })
+    }
+
     fn ln_density(&self, _scene: &Scene, state: &PrimaryState) -> f64 {
         state.contribution.importance.ln()
     }

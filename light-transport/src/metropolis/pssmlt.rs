@@ -23,6 +23,33 @@ use std::cell::RefCell;
 
 thread_local! {
     static SUBPATHS: RefCell<(Vec<Vertex>, Vec<Vertex>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+    /// The state a thread evaluates its bootstrap samples in ([`bootstrap_weight`]).
+    static BOOTSTRAP: RefCell<Option<PrimaryState>> = const { RefCell::new(None) };
+}
+
+/// The importance of the fresh state `PrimaryState::new(kelemen, seed, length)` evaluated by
+/// `evaluate`, computed in a per-thread state whose storage is reused: the bootstrap of PSSMLT
+/// and MMLT evaluates 100 000 samples per path length and keeps none of them.
+pub(super) fn bootstrap_weight(
+    kelemen: Kelemen,
+    seed: u64,
+    length: usize,
+    evaluate: impl FnOnce(&mut PrimaryState),
+) -> f64 {
+    BOOTSTRAP.with_borrow_mut(|slot| {
+        let state = match slot {
+            Some(state) => {
+                state.sample.reset(kelemen.small_step, seed);
+                state.contribution.splats.clear();
+                state.contribution.importance = 0.0;
+                state.length = length;
+                state
+            }
+            None => slot.insert(PrimaryState::new(kelemen, seed, length)),
+        };
+        evaluate(state);
+        state.contribution.importance
+    })
 }
 
 /// A PSSMLT (or MMLT) chain state: the primary sample and what it evaluated to.
@@ -158,6 +185,10 @@ impl Method for Pssmlt {
         self.evaluate(scene, &mut s);
         let w = s.contribution.importance;
         (s, w)
+    }
+
+    fn independent_weight(&self, scene: &Scene, _g: usize, seed: u64) -> f64 {
+        bootstrap_weight(self.kelemen, seed, 0, |s| self.evaluate(scene, s))
     }
 
     fn ln_density(&self, _scene: &Scene, state: &PrimaryState) -> f64 {

@@ -101,6 +101,19 @@ impl Method for PathMlt {
         (state, w)
     }
 
+    fn independent_weight(&self, scene: &Scene, g: usize, seed: u64) -> f64 {
+        thread_local! {
+            // The state the bootstrap samples of a thread are evaluated in (its vectors reused).
+            static STATE: std::cell::RefCell<PathState> = std::cell::RefCell::new(PathState::default());
+        }
+        let mut stream = IndependentStream::new(mcmc_core::rng::stream(seed, 0));
+        let k = g + 1;
+        STATE.with_borrow_mut(|state| {
+            NewPath::sample(scene, self.mutations.importance, k, &mut stream, state);
+            (k + 1) as f64 * state.contribution.importance
+        })
+    }
+
     fn ln_density(&self, _scene: &Scene, state: &PathState) -> f64 {
         super::mutations::ln_target(state)
     }
