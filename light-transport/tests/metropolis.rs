@@ -212,6 +212,18 @@ fn pssmlt(importance: ImportanceKind) -> Pssmlt {
     }
 }
 
+/// MMLT with the defaults of these tests (luminance importance, power heuristic).
+fn mmlt() -> Mmlt {
+    Mmlt {
+        walk: WalkSettings {
+            max_edges: MAX_EDGES,
+        },
+        heuristic: MisHeuristic::Power,
+        kelemen: Kelemen::default(),
+        importance: ImportanceKind::Luminance,
+    }
+}
+
 /// PSSMLT whose BDPT walks stop by Russian roulette from the first surface vertex on (the most
 /// aggressive setting), in both walks and in light walks only (the CLI's default), converges to
 /// BDPT without roulette on every built-in scene. Per-block Welch tests with Holm's correction at
@@ -241,14 +253,7 @@ fn pssmlt_with_russian_roulette_converges_to_bdpt() {
 
 #[test]
 fn pssmlt_and_mmlt_converge_to_bdpt_on_every_builtin_scene() {
-    let mmlt = Mmlt {
-        walk: WalkSettings {
-            max_edges: MAX_EDGES,
-        },
-        heuristic: MisHeuristic::Power,
-        kelemen: Kelemen::default(),
-        importance: ImportanceKind::Luminance,
-    };
+    let mmlt = mmlt();
     for name in builtin::BUILTIN {
         let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((W, H))).unwrap();
         let reference = bdpt_batches(&scene);
@@ -334,14 +339,7 @@ fn mismatched_importance_is_caught() {
 /// `PrimarySample::reset` keeping the old coordinates, PSSMLT's second sample differs.
 #[test]
 fn bootstrap_weights_in_reused_storage_equal_fresh_samples() {
-    let mmlt = Mmlt {
-        walk: WalkSettings {
-            max_edges: MAX_EDGES,
-        },
-        heuristic: MisHeuristic::Power,
-        kelemen: Kelemen::default(),
-        importance: ImportanceKind::Luminance,
-    };
+    let mmlt = mmlt();
     let mut with_roulette = pssmlt(ImportanceKind::Luminance);
     with_roulette.bdpt.roulette = Some(Roulette {
         from: 1,

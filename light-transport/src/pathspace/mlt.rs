@@ -82,6 +82,16 @@ impl PathMlt {
             .map(|g| g.clone())
             .unwrap_or_else(|e| e.into_inner().clone())
     }
+
+    /// Independent sample `seed` of group `g` (paths of `g + 1` edges) into `state`, returning its
+    /// bootstrap weight: strategy `s` uniform in `0 … k`, so the weight within its length is
+    /// `(k + 1) I(f / Σ_s p_s)`.
+    fn sample_independent(&self, scene: &Scene, g: usize, seed: u64, state: &mut PathState) -> f64 {
+        let mut stream = IndependentStream::new(mcmc_core::rng::stream(seed, 0));
+        let k = g + 1;
+        NewPath::sample(scene, self.mutations.importance, k, &mut stream, state);
+        (k + 1) as f64 * state.contribution.importance
+    }
 }
 
 impl Method for PathMlt {
@@ -92,12 +102,8 @@ impl Method for PathMlt {
     }
 
     fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (PathState, f64) {
-        let mut stream = IndependentStream::new(mcmc_core::rng::stream(seed, 0));
         let mut state = PathState::default();
-        let k = g + 1;
-        NewPath::sample(scene, self.mutations.importance, k, &mut stream, &mut state);
-        // Strategy s uniform in 0 … k: the weight within its length is (k + 1) I(f / Σ_s p_s).
-        let w = (k + 1) as f64 * state.contribution.importance;
+        let w = self.sample_independent(scene, g, seed, &mut state);
         (state, w)
     }
 
@@ -106,12 +112,7 @@ impl Method for PathMlt {
             // The state the bootstrap samples of a thread are evaluated in (its vectors reused).
             static STATE: std::cell::RefCell<PathState> = std::cell::RefCell::new(PathState::default());
         }
-        let mut stream = IndependentStream::new(mcmc_core::rng::stream(seed, 0));
-        let k = g + 1;
-        STATE.with_borrow_mut(|state| {
-            NewPath::sample(scene, self.mutations.importance, k, &mut stream, state);
-            (k + 1) as f64 * state.contribution.importance
-        })
+        STATE.with_borrow_mut(|state| self.sample_independent(scene, g, seed, state))
     }
 
     fn ln_density(&self, _scene: &Scene, state: &PathState) -> f64 {
