@@ -65,6 +65,8 @@ impl Estimator for PathTracer {
         // The radiance compression of the refractions so far, divided out of the throughput
         // that Russian roulette looks at ([`crate::bsdf::Bsdf::radiance_compression`]).
         let mut compression = 1.0;
+        // Each vertex's BSDF is built in this one slot (no BSDF moved per bounce).
+        let mut slot = None;
         for bounces in 0..self.max_edges {
             let Some(hit) = scene.intersect(&ray) else {
                 break;
@@ -89,7 +91,8 @@ impl Estimator for PathTracer {
             if bounces + 2 > self.max_edges {
                 break;
             }
-            let Ok(bsdf) = scene.bsdf(&p) else { break };
+            scene.bsdf_into(&p, &mut slot);
+            let Some(bsdf) = slot.as_ref() else { break };
             // Next-event estimation: a path of `bounces + 2` edges.
             stream.start_stream(TECHNIQUE_STREAM);
             let choice = stream.next_1d();
@@ -104,7 +107,7 @@ impl Estimator for PathTracer {
                         scene,
                         &p,
                         wo,
-                        &bsdf,
+                        bsdf,
                         choice,
                         u_light,
                         self.heuristic,

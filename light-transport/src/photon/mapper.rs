@@ -204,6 +204,7 @@ impl PhotonMapper {
     fn shade(&self, scene: &Scene, mut ray: Ray, mut edges: usize, rng: &mut ChainRng) -> Rgb {
         let mut beta = Rgb::WHITE;
         let mut l = Rgb::BLACK;
+        let mut slot = None; // each vertex's BSDF, built in place
         while edges < self.settings.max_edges {
             let Some(hit) = scene.intersect(&ray) else {
                 break;
@@ -214,16 +215,17 @@ impl PhotonMapper {
             if let Some((_, light)) = scene.light_at(p.primitive) {
                 l += beta * light.radiance(p.n, wo);
             }
-            let Ok(bsdf) = scene.bsdf(&p) else { break };
+            scene.bsdf_into(&p, &mut slot);
+            let Some(bsdf) = slot.as_ref() else { break };
             if bsdf.is_delta_only() {
-                let Some((weight, next, _, _)) = bounce(&bsdf, &p, wo, rng) else {
+                let Some((weight, next, _, _)) = bounce(bsdf, &p, wo, rng) else {
                     break;
                 };
                 beta *= weight;
                 ray = next;
                 continue;
             }
-            l += beta * self.at_diffuse(scene, &p, wo, &bsdf, edges, rng);
+            l += beta * self.at_diffuse(scene, &p, wo, bsdf, edges, rng);
             break;
         }
         l
@@ -297,6 +299,7 @@ impl PhotonMapper {
         let mut beta = Rgb::WHITE;
         let mut l = Rgb::BLACK;
         let mut first = true;
+        let mut slot = None; // each vertex's BSDF, built in place
         while edges < self.settings.max_edges {
             let Some(hit) = scene.intersect(&ray) else {
                 break;
@@ -314,9 +317,10 @@ impl PhotonMapper {
                 }
             }
             first = false;
-            let Ok(bsdf) = scene.bsdf(&p) else { break };
+            scene.bsdf_into(&p, &mut slot);
+            let Some(bsdf) = slot.as_ref() else { break };
             if bsdf.is_delta_only() {
-                let Some((weight, next, _, _)) = bounce(&bsdf, &p, wo, rng) else {
+                let Some((weight, next, _, _)) = bounce(bsdf, &p, wo, rng) else {
                     break;
                 };
                 beta *= weight;
