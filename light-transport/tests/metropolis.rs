@@ -333,10 +333,12 @@ fn mismatched_importance_is_caught() {
 
 /// The bootstrap's weights, computed in per-thread storage that each sample reuses
 /// (`Method::independent_weight`), are bit for bit those of the independent samples the seeding
-/// replays (`Method::independent`), for PSSMLT (with and without roulette), MMLT and path-space
-/// MLT, on every built-in scene, with samples of different path lengths interleaved so that each
+/// replays (`Method::independent`), for PSSMLT (with and without roulette), MMLT, path-space
+/// MLT and charted MLT, on every built-in scene, with samples of different path lengths interleaved so that each
 /// reuse starts from another sample's leftovers. The test of the test, run by hand: with
-/// `PrimarySample::reset` keeping the old coordinates, PSSMLT's second sample differs.
+/// `PrimarySample::reset` keeping the old coordinates, PSSMLT's second sample differs; with
+/// charted MLT's reused state keeping its old cached evaluation (`fresh` not cleared), its
+/// second sample differs.
 #[test]
 fn bootstrap_weights_in_reused_storage_equal_fresh_samples() {
     let mmlt = mmlt();
@@ -365,14 +367,16 @@ fn bootstrap_weights_in_reused_storage_equal_fresh_samples() {
         }
         nonzero
     }
-    let mut total = [0; 4];
+    let mut total = [0; 5];
     for name in builtin::BUILTIN {
         let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((W, H))).unwrap();
+        let cmlt = light_transport::cmlt::Cmlt::new(&scene, Default::default()).unwrap();
         let n = [
             check(&pssmlt(ImportanceKind::Luminance), &scene, "pssmlt"),
             check(&with_roulette, &scene, "pssmlt with roulette"),
             check(&mmlt, &scene, "mmlt"),
             check(&mlt, &scene, "path-space mlt"),
+            check(&cmlt, &scene, "charted mlt"),
         ];
         println!("{name}: nonzero weights {n:?} of 2000 each");
         for (t, k) in total.iter_mut().zip(n) {

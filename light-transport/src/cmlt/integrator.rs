@@ -310,6 +310,34 @@ impl Cmlt {
     }
 
     /// The technique charts of paths of `k` edges (`s = 0 … k`).
+    /// An independent sample of path length `g + 1` from generator seed `seed`, evaluated in
+    /// `state` (whatever it held before): a chart `s` uniform in `0 … k`, coordinates uniform in
+    /// it. Returns the bootstrap weight `(k + 1) π_s(u)` (the chart was chosen with probability
+    /// `1/(k + 1)`).
+    fn sample_independent(&self, scene: &Scene, g: usize, seed: u64, state: &mut CmltState) -> f64 {
+        let k = g + 1;
+        let mut rng = stream(seed, 0);
+        let s = uniform_index(uniform(&mut rng), k + 1);
+        let atlas = self.atlas(scene, k);
+        let target = Self::target(&atlas);
+        // `CmltState::in_chart(s, u)`, in the storage `state` has.
+        state.chart = s;
+        state.u.clear();
+        state.u.extend((0..atlas.dim(s)).map(|_| uniform(&mut rng)));
+        state.valid = false;
+        state.fresh = false;
+        state.importance = 0.0;
+        state.ln_p.clear();
+        state.x.change = None;
+        state.x.suitability = Default::default();
+        let ln = target.ln_density(s, state);
+        if ln.is_finite() {
+            (k + 1) as f64 * ln.exp()
+        } else {
+            0.0
+        }
+    }
+
     pub fn atlas<'a>(&self, scene: &'a Scene, k: usize) -> TechniqueAtlas<'a> {
         Atlas::of((0..=k).filter_map(|s| self.chart(scene, k, s)).collect())
     }
@@ -464,21 +492,18 @@ impl Method for Cmlt {
     }
 
     fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (CmltState, f64) {
-        let k = g + 1;
-        let mut rng = stream(seed, 0);
-        let s = uniform_index(uniform(&mut rng), k + 1);
-        let atlas = self.atlas(scene, k);
-        let target = Self::target(&atlas);
-        let u = (0..atlas.dim(s)).map(|_| uniform(&mut rng)).collect();
-        let mut state = CmltState::in_chart(s, u);
-        let ln = target.ln_density(s, &mut state);
-        // The chart was chosen with probability 1/(k + 1): bootstrap weight (k + 1) π_s(u).
-        let w = if ln.is_finite() {
-            (k + 1) as f64 * ln.exp()
-        } else {
-            0.0
-        };
+        let mut state = CmltState::in_chart(0, Vec::new());
+        let w = self.sample_independent(scene, g, seed, &mut state);
         (state, w)
+    }
+
+    fn independent_weight(&self, scene: &Scene, g: usize, seed: u64) -> f64 {
+        thread_local! {
+            // The state the bootstrap samples of a thread are evaluated in (its vectors reused).
+            static STATE: std::cell::RefCell<CmltState> =
+                std::cell::RefCell::new(CmltState::in_chart(0, Vec::new()));
+        }
+        STATE.with_borrow_mut(|state| self.sample_independent(scene, g, seed, state))
     }
 
     fn ln_density(&self, scene: &Scene, state: &CmltState) -> f64 {

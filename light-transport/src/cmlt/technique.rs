@@ -270,8 +270,7 @@ impl Chart<PathState> for TechniqueChart<'_> {
             return false;
         }
         let mut stream = ReplayStream::new(&u[..nc], &u[nc..], &[]);
-        let mut buffers = (Vec::new(), Vec::new());
-        if sample_path(self.scene, self.k, self.s, &mut stream, &mut buffers, x).is_none() {
+        if sample_path(self.scene, self.k, self.s, &mut stream, x).is_none() {
             return false;
         }
         x.evaluate(self.scene, self.importance, 1.0) && x.strategy_importance(self.s) > 0.0

@@ -90,14 +90,7 @@ impl NewPath {
         stream.start_stream(TECHNIQUE_STREAM);
         stream.seek(layout::TECHNIQUE);
         let s = uniform_index(stream.next_1d(), k + 1);
-        thread_local! {
-            // The two subpaths, kept per thread: a new path is sampled per bootstrap sample and
-            // per new-path proposal, and the walks reserve a whole subpath of vertices.
-            static BUFFERS: std::cell::RefCell<(Vec<crate::path::Vertex>, Vec<crate::path::Vertex>)> =
-                const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
-        }
-        let sampled =
-            BUFFERS.with_borrow_mut(|buffers| sample_path(scene, k, s, stream, buffers, out));
+        let sampled = sample_path(scene, k, s, stream, out);
         if sampled.is_none() {
             out.path.vertices.clear();
             out.discard();

@@ -363,7 +363,6 @@ mod tests {
     fn strategies_equal_connecting_retraced_subpaths() {
         let mut rng = stream(9, 0);
         let (mut scratch, mut out) = (Scratch::default(), Vec::new());
-        let mut buffers = (Vec::new(), Vec::new());
         for name in builtin::all() {
             let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((32, 24))).unwrap();
             let mut sampler = IndependentStream::new(stream(10, 0));
@@ -376,7 +375,7 @@ mod tests {
                 let s = ((uniform(&mut rng) * (k + 2) as f64) as usize).min(k + 1);
                 let mut state = PathState::default();
                 sampler.new_sample();
-                if sample_path(&scene, k, s, &mut sampler, &mut buffers, &mut state).is_none() {
+                if sample_path(&scene, k, s, &mut sampler, &mut state).is_none() {
                     continue;
                 }
                 let path = &state.path;

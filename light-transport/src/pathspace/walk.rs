@@ -217,22 +217,28 @@ pub fn cone_pdf(axis: DVec3, w: DVec3, beta: f64) -> f64 {
 
 /// Sample a whole path of `k` edges by strategy `s` (light vertices) from `stream`, as BDPT would
 /// (the connection is tested for visibility); `None` when the subpaths fall short or the
-/// connection carries nothing. The path is not evaluated.
+/// connection carries nothing. The path is not evaluated. The two subpaths are walked in buffers
+/// kept per thread (a path is sampled per bootstrap sample, new-path proposal and technique-chart
+/// map, and a walk reserves a whole subpath of vertices).
 pub fn sample_path<S: SampleStream>(
     scene: &Scene,
     k: usize,
     s: usize,
     stream: &mut S,
-    buffers: &mut (Vec<Vertex>, Vec<Vertex>),
     out: &mut PathState,
 ) -> Option<()> {
-    let t = k + 1 - s;
-    let (light, cam) = buffers;
-    camera_subpath(scene, stream, t, None, cam);
-    light_subpath(scene, stream, s, light);
-    if cam.len() < t || light.len() < s {
-        return None;
+    thread_local! {
+        static BUFFERS: std::cell::RefCell<(Vec<Vertex>, Vec<Vertex>)> =
+            const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
     }
-    connect(scene, light, cam, s, t)?;
-    out.path.set_from_subpaths(scene, light, cam, s, t)
+    BUFFERS.with_borrow_mut(|(light, cam)| {
+        let t = k + 1 - s;
+        camera_subpath(scene, stream, t, None, cam);
+        light_subpath(scene, stream, s, light);
+        if cam.len() < t || light.len() < s {
+            return None;
+        }
+        connect(scene, light, cam, s, t)?;
+        out.path.set_from_subpaths(scene, light, cam, s, t)
+    })
 }
