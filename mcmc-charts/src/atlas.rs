@@ -40,6 +40,19 @@ impl<X: Default> ChartState<X> {
 }
 
 impl<X> ChartState<X> {
+    /// Become the state [`ChartState::in_chart`]`(chart, u)` would make, keeping this state's
+    /// storage: its vectors, and its point `x`, which is stale until the state is next evaluated
+    /// (a caller evaluating many independent states one after another allocates once).
+    pub fn move_to(&mut self, chart: usize, u: impl IntoIterator<Item = f64>) {
+        self.chart = chart;
+        self.u.clear();
+        self.u.extend(u);
+        self.valid = false;
+        self.fresh = false;
+        self.importance = 0.0;
+        self.ln_p.clear();
+    }
+
     /// A state in target space (the identity chart of `atlas`) at `x`.
     pub fn at_point<Y, C: Chart<Y>>(atlas: &Atlas<Y, C>, x: X) -> Self {
         Self {
@@ -210,5 +223,28 @@ impl<X, C: Chart<X>> Atlas<X, C> {
         let bias_from = self.ln_inverse_bias(from.chart, &from.x, &from.u);
         let bias_to = self.ln_inverse_bias(to_chart, &from.x, &to.u);
         ln_p_to - ln_p_from + bias_from - bias_to
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ChartState;
+
+    /// A moved state is the fresh state `in_chart` makes, whatever it held before, but for its
+    /// (stale) point.
+    #[test]
+    fn a_moved_state_is_a_fresh_state_but_for_its_point() {
+        let mut used = ChartState {
+            chart: 3,
+            u: vec![0.1, 0.2, 0.3],
+            x: 7.5,
+            valid: true,
+            fresh: true,
+            importance: 2.0,
+            ln_p: vec![-1.0, -2.0],
+        };
+        used.move_to(1, [0.4, 0.6]);
+        let fresh = ChartState::<f64>::in_chart(1, vec![0.4, 0.6]);
+        assert_eq!(ChartState { x: fresh.x, ..used }, fresh);
     }
 }

@@ -309,7 +309,6 @@ impl Cmlt {
         TechniqueChart::new(scene, k, s, self.settings.importance)
     }
 
-    /// The technique charts of paths of `k` edges (`s = 0 … k`).
     /// An independent sample of path length `g + 1` from generator seed `seed`, evaluated in
     /// `state` (whatever it held before): a chart `s` uniform in `0 … k`, coordinates uniform in
     /// it. Returns the bootstrap weight `(k + 1) π_s(u)` (the chart was chosen with probability
@@ -320,14 +319,7 @@ impl Cmlt {
         let s = uniform_index(uniform(&mut rng), k + 1);
         let atlas = self.atlas(scene, k);
         let target = Self::target(&atlas);
-        // `CmltState::in_chart(s, u)`, in the storage `state` has.
-        state.chart = s;
-        state.u.clear();
-        state.u.extend((0..atlas.dim(s)).map(|_| uniform(&mut rng)));
-        state.valid = false;
-        state.fresh = false;
-        state.importance = 0.0;
-        state.ln_p.clear();
+        state.move_to(s, (0..atlas.dim(s)).map(|_| uniform(&mut rng)));
         state.x.change = None;
         state.x.suitability = Default::default();
         let ln = target.ln_density(s, state);
@@ -338,6 +330,7 @@ impl Cmlt {
         }
     }
 
+    /// The technique charts of paths of `k` edges (`s = 0 … k`).
     pub fn atlas<'a>(&self, scene: &'a Scene, k: usize) -> TechniqueAtlas<'a> {
         Atlas::of((0..=k).filter_map(|s| self.chart(scene, k, s)).collect())
     }

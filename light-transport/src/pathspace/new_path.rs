@@ -90,8 +90,7 @@ impl NewPath {
         stream.start_stream(TECHNIQUE_STREAM);
         stream.seek(layout::TECHNIQUE);
         let s = uniform_index(stream.next_1d(), k + 1);
-        let sampled = sample_path(scene, k, s, stream, out);
-        if sampled.is_none() {
+        if sample_path(scene, k, s, stream, out).is_none() {
             out.path.vertices.clear();
             out.discard();
             return false;
