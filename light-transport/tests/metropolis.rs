@@ -3,6 +3,9 @@
 //! * Seeding is unbiased: on a 1D toy (a 32×1 film whose pixel values are the integrals of a known
 //!   function), the average image of many short independent runs equals the exact integral; the
 //!   same test fails when chains are seeded uniformly instead of by resampling.
+//! * Large steps combined with the chain by the balance heuristic keep the toy unbiased, with one
+//!   group and two; a wrong probability, the wrong move kind or one group's `b_g` for all is
+//!   caught.
 //! * A sampler that is not a deterministic function of its numbers is refused (replay check).
 //! * PSSMLT and MMLT converge to the BDPT image on every built-in scene, and a PSSMLT whose
 //!   recording uses another importance than its chains (a known cause of too-dark MLT images) is
@@ -25,7 +28,7 @@ use light_transport::path::{MisHeuristic, Roulette, WalkSettings};
 use light_transport::scene::{Scene, builtin};
 use light_transport::spectrum::Rgb;
 use mcmc_core::kernel::Observer;
-use mcmc_core::primary_sample::{Kelemen, PrimarySample};
+use mcmc_core::primary_sample::{Kelemen, LARGE_STEP, PrimarySample, SMALL_STEP};
 use mcmc_core::{Chain, ChainRng};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -43,12 +46,25 @@ fn f_integral(a: f64, b: f64) -> f64 {
     g(b) - g(a) + spike
 }
 
-struct Toy;
+/// The toy's method; `large_steps` is what it declares to the driver as its large steps
+/// ([`Method::large_steps`]; its kernel's are Kelemen's default, probability 0.3). With two
+/// groups (as MMLT's path lengths), group 1 samples `10 f` into the same pixels (its state's
+/// `length` is 2), so the image is 11 times the one-group toy's.
+struct Toy {
+    large_steps: Option<(usize, f64)>,
+    groups: usize,
+}
+
+/// The toy recorded by expected values alone.
+const TOY: Toy = Toy {
+    large_steps: None,
+    groups: 1,
+};
 
 impl Toy {
     fn evaluate(s: &mut PrimaryState) {
         let u = s.sample.get(0, 0);
-        let v = f(u);
+        let v = f(u) * if s.length == 2 { 10.0 } else { 1.0 };
         s.contribution = Contribution {
             splats: vec![([u * 32.0, 0.5], Rgb::splat(v))],
             importance: v,
@@ -59,13 +75,13 @@ impl Toy {
 impl Method for Toy {
     type State = PrimaryState;
     fn groups(&self) -> usize {
-        1
+        self.groups
     }
-    fn independent(&self, _scene: &Scene, _g: usize, seed: u64) -> (PrimaryState, f64) {
+    fn independent(&self, _scene: &Scene, g: usize, seed: u64) -> (PrimaryState, f64) {
         let mut s = PrimaryState {
             sample: PrimarySample::new(1, Default::default(), seed).unwrap(),
             contribution: Contribution::default(),
-            length: 0,
+            length: if self.groups > 1 { g + 1 } else { 0 },
         };
         Toy::evaluate(&mut s);
         let w = s.contribution.importance;
@@ -95,9 +111,12 @@ impl Method for Toy {
     fn kinds(&self) -> Vec<String> {
         vec!["small".into(), "large".into()]
     }
+    fn large_steps(&self) -> Option<(usize, f64)> {
+        self.large_steps
+    }
 }
 
-fn toy_runs(seeding: Seeding) -> Vec<Vec<f64>> {
+fn toy_runs(toy: &Toy, seeding: Seeding) -> Vec<Vec<f64>> {
     let scene = Scene::new(&builtin::builtin("cornell").unwrap(), Some((32, 1))).unwrap();
     (0..300)
         .map(|r| {
@@ -109,7 +128,7 @@ fn toy_runs(seeding: Seeding) -> Vec<Vec<f64>> {
                 seed: 1000 + r,
                 seeding,
             };
-            let (film, _) = metropolis::run(&scene, &Toy, &settings, |_, _, _| true).unwrap();
+            let (film, _) = metropolis::run(&scene, toy, &settings, |_, _, _| true).unwrap();
             Image::from_film(&film)
                 .pixels
                 .iter()
@@ -121,15 +140,100 @@ fn toy_runs(seeding: Seeding) -> Vec<Vec<f64>> {
 
 #[test]
 fn seeding_is_unbiased_on_a_1d_toy_and_uniform_seeding_is_caught() {
-    let exact: Vec<f64> = (0..32)
-        .map(|j| f_integral(j as f64 / 32.0, (j + 1) as f64 / 32.0) * 32.0)
-        .collect();
-    let p = min_p(&toy_runs(Seeding::Resample), std::slice::from_ref(&exact));
+    let exact = toy_exact(&TOY);
+    let p = min_p(
+        &toy_runs(&TOY, Seeding::Resample),
+        std::slice::from_ref(&exact),
+    );
     println!("resampled seeds: p = {p:.3e}");
     assert!(p > ALPHA, "resampled seeding is biased (p = {p:.2e})");
-    let q = min_p(&toy_runs(Seeding::UniformBiased), &[exact]);
+    let q = min_p(&toy_runs(&TOY, Seeding::UniformBiased), &[exact]);
     println!("uniform seeds: p = {q:.3e}");
     assert!(q < ALPHA, "uniform seeding was not caught (p = {q:.2e})");
+}
+
+fn toy_exact(toy: &Toy) -> Vec<f64> {
+    let scale = if toy.groups > 1 { 11.0 } else { 1.0 };
+    (0..32)
+        .map(|j| f_integral(j as f64 / 32.0, (j + 1) as f64 / 32.0) * 32.0 * scale)
+        .collect()
+}
+
+/// Per-pixel variance over the runs.
+fn variances(runs: &[Vec<f64>]) -> Vec<f64> {
+    let n = runs.len() as f64;
+    (0..runs[0].len())
+        .map(|j| {
+            let mean = runs.iter().map(|r| r[j]).sum::<f64>() / n;
+            runs.iter().map(|r| (r[j] - mean).powi(2)).sum::<f64>() / (n - 1.0)
+        })
+        .collect()
+}
+
+/// Large steps counted as independent samples too, combined with the chain by the balance
+/// heuristic (Kelemen et al. 2002 §4; `metropolis::record::LargeStepMis`), leave the 1D toy's
+/// image unbiased (Welch tests per pixel against the exact integral, Holm-corrected, α = 1e-4,
+/// so a false alarm has probability ≤ 1e-4 per verdict), with one group and with two groups of
+/// different normalisations (each group's large steps weighed with its own `b_g`), and with
+/// less variance where `f` is low. Two wrong declarations are caught: a probability other than
+/// the kernel's (0.1 for 0.3: the two estimators' weights no longer sum to one) and the small
+/// steps declared as the large steps. Weighing every group's large steps with group 0's `b_0`
+/// (a `PrimaryState::group` that returns 0) makes the two-group verdict fail (p = 8.8e-12, run by
+/// hand).
+#[test]
+fn large_steps_combined_by_the_balance_heuristic_are_unbiased_on_the_1d_toy() {
+    let combined = |groups| Toy {
+        large_steps: Some((LARGE_STEP, 0.3)),
+        groups,
+    };
+    let exact = toy_exact(&TOY);
+    let runs = toy_runs(&combined(1), Seeding::Resample);
+    let p = min_p(&runs, std::slice::from_ref(&exact));
+    println!("large steps combined: p = {p:.3e}");
+    assert!(p > ALPHA, "combined large steps are biased (p = {p:.2e})");
+    let two = combined(2);
+    let p2 = min_p(
+        &toy_runs(&two, Seeding::Resample),
+        std::slice::from_ref(&toy_exact(&two)),
+    );
+    println!("large steps combined, two groups: p = {p2:.3e}");
+    assert!(
+        p2 > ALPHA,
+        "combined large steps are biased with two groups (p = {p2:.2e})"
+    );
+    let (v_plain, v_combined) = (
+        variances(&toy_runs(&TOY, Seeding::Resample)),
+        variances(&runs),
+    );
+    let ratio: Vec<String> = v_combined
+        .iter()
+        .zip(&v_plain)
+        .map(|(c, p)| format!("{:.2}", c / p))
+        .collect();
+    println!(
+        "variance combined / expected values alone, per pixel: {}",
+        ratio.join(" ")
+    );
+    for (declared, what) in [
+        ((LARGE_STEP, 0.1), "a wrong probability"),
+        ((SMALL_STEP, 0.3), "the small steps"),
+    ] {
+        let q = min_p(
+            &toy_runs(
+                &Toy {
+                    large_steps: Some(declared),
+                    groups: 1,
+                },
+                Seeding::Resample,
+            ),
+            std::slice::from_ref(&exact),
+        );
+        println!("{what} declared as large steps: p = {q:.3e}");
+        assert!(
+            q < ALPHA,
+            "{what} declared as large steps was not caught (p = {q:.2e})"
+        );
+    }
 }
 
 /// Importance changes on every call: replaying a seed cannot reproduce its bootstrap value.
@@ -141,14 +245,14 @@ impl Method for NotReplayable {
         1
     }
     fn independent(&self, s: &Scene, g: usize, seed: u64) -> (PrimaryState, f64) {
-        let (st, w) = Toy.independent(s, g, seed);
+        let (st, w) = TOY.independent(s, g, seed);
         (
             st,
             w * (1.0 + self.0.fetch_add(1, Ordering::Relaxed) as f64 * 1e-6),
         )
     }
     fn ln_density(&self, s: &Scene, st: &PrimaryState) -> f64 {
-        Toy.ln_density(s, st)
+        TOY.ln_density(s, st)
     }
     fn mutate<O: Observer<PrimaryState>>(
         &self,
@@ -158,10 +262,10 @@ impl Method for NotReplayable {
         r: &mut ChainRng,
         o: &mut O,
     ) {
-        Toy.mutate(s, c, n, r, o)
+        TOY.mutate(s, c, n, r, o)
     }
     fn kinds(&self) -> Vec<String> {
-        Toy.kinds()
+        TOY.kinds()
     }
 }
 
@@ -209,6 +313,7 @@ fn pssmlt(importance: ImportanceKind) -> Pssmlt {
         },
         kelemen: Kelemen::default(),
         importance,
+        large_step_mis: true,
     }
 }
 
@@ -221,6 +326,7 @@ fn mmlt() -> Mmlt {
         heuristic: MisHeuristic::Power,
         kelemen: Kelemen::default(),
         importance: ImportanceKind::Luminance,
+        large_step_mis: true,
     }
 }
 

@@ -380,6 +380,7 @@ impl Estimator for ErptWithoutMis {
         let mut rec = ExpectedValue {
             recorder: splats,
             b: self.0.quantum / n as f64,
+            large_steps: None,
         };
         for (state, _) in seeds {
             // Which strategy sampled it is lost in `seed_paths`: take the larger C*, which is

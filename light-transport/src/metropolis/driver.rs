@@ -5,7 +5,7 @@
 //! master seed; chains are processed in fixed groups whose splats are applied to the film in group
 //! order after every round, so the image is identical for any thread count.
 
-use super::record::{ExpectedValue, Recordable, Sink};
+use super::record::{ExpectedValue, LargeStepMis, Recordable, Sink};
 use crate::budget::Budget;
 use crate::film::Film;
 use crate::scene::Scene;
@@ -77,6 +77,14 @@ pub trait Method: Sync {
     /// acceptance); none by default.
     fn details(&self) -> Vec<String> {
         Vec::new()
+    }
+    /// The move kind that proposes, with the returned probability, an independent sample of unit
+    /// density over its group's space (Kelemen's large step in primary sample space), if the
+    /// method wants those samples counted as an estimate of the image of their own, combined with
+    /// the chain's by the balance heuristic ([`super::record::LargeStepMis`]). `None` by default:
+    /// every proposal is recorded by its expected value alone.
+    fn large_steps(&self) -> Option<(usize, f64)> {
+        None
     }
     /// Told the per-group normalisations `b_g` once the bootstrap is done, before any chain runs
     /// (e.g. to choose path lengths in proportion to their energy).
@@ -362,6 +370,14 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let split = SPLIT.min(chains.len());
     let size = chains.len().div_ceil(split);
     let b = stats.normalisation;
+    let large_steps = method
+        .large_steps()
+        .filter(|&(_, p)| p > 0.0)
+        .map(|(kind, probability)| LargeStepMis {
+            kind,
+            probability,
+            group_normalisation: &stats.group_normalisation,
+        });
     let exchange_every = method.exchange_every();
     let mut exchange_rng = substream(settings.seed, EXCHANGE, 0);
     let mut round = 0;
@@ -392,7 +408,11 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
                 .zip(outputs.par_iter_mut())
                 .for_each(|((cs, rs), (chunk, rays))| {
                     crate::accel::take_ray_count();
-                    let mut rec = ExpectedValue { recorder: chunk, b };
+                    let mut rec = ExpectedValue {
+                        recorder: chunk,
+                        b,
+                        large_steps,
+                    };
                     method.mutate_chunk(scene, cs, rs, step, &mut rec);
                     *rays += crate::accel::take_ray_count();
                 });

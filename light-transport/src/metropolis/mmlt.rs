@@ -14,7 +14,7 @@ use crate::path::{
 use crate::sampler::{CAMERA_STREAM, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
 use mcmc_core::kernel::Observer;
-use mcmc_core::primary_sample::Kelemen;
+use mcmc_core::primary_sample::{Kelemen, LARGE_STEP};
 use mcmc_core::{Chain, ChainRng, Proposal};
 use std::cell::RefCell;
 
@@ -33,6 +33,10 @@ pub struct Mmlt {
     pub kelemen: Kelemen,
     /// Colour to scalar.
     pub importance: ImportanceKind,
+    /// Large steps count as independent samples of their path length's image too, combined with
+    /// the chains by the balance heuristic (Kelemen et al. 2002 §4;
+    /// [`super::record::LargeStepMis`]).
+    pub large_step_mis: bool,
 }
 
 impl Mmlt {
@@ -124,5 +128,10 @@ impl Method for Mmlt {
 
     fn kinds(&self) -> Vec<String> {
         self.kelemen.kinds()
+    }
+
+    fn large_steps(&self) -> Option<(usize, f64)> {
+        self.large_step_mis
+            .then_some((LARGE_STEP, self.kelemen.large_step_probability))
     }
 }

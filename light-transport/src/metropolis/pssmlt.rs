@@ -17,7 +17,7 @@ use crate::path::Vertex;
 use crate::sampler::{CAMERA_STREAM, STREAMS, layout};
 use crate::scene::Scene;
 use mcmc_core::kernel::Observer;
-use mcmc_core::primary_sample::{Kelemen, PrimarySample};
+use mcmc_core::primary_sample::{Kelemen, LARGE_STEP, PrimarySample};
 use mcmc_core::{Chain, ChainRng, Kernel, MetropolisHastings, Proposal, Proposed, Target};
 use std::cell::RefCell;
 
@@ -79,6 +79,9 @@ impl Recordable for PrimaryState {
     fn contribution(&self) -> &Contribution {
         &self.contribution
     }
+    fn group(&self) -> usize {
+        self.length.saturating_sub(1)
+    }
 }
 
 /// PSSMLT settings.
@@ -90,6 +93,9 @@ pub struct Pssmlt {
     pub kelemen: Kelemen,
     /// Colour to scalar.
     pub importance: ImportanceKind,
+    /// Large steps count as independent samples of the image too, combined with the chain by
+    /// the balance heuristic (Kelemen et al. 2002 §4; [`super::record::LargeStepMis`]).
+    pub large_step_mis: bool,
 }
 
 impl Pssmlt {
@@ -216,5 +222,10 @@ impl Method for Pssmlt {
 
     fn kinds(&self) -> Vec<String> {
         self.kelemen.kinds()
+    }
+
+    fn large_steps(&self) -> Option<(usize, f64)> {
+        self.large_step_mis
+            .then_some((LARGE_STEP, self.kelemen.large_step_probability))
     }
 }

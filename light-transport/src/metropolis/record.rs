@@ -1,7 +1,9 @@
 //! How Metropolis chains record what they sample (Veach & Guibas 1997 §3.4; charted-MLT paper
 //! §5.4): every proposal deposits its expected value — `a` times the candidate and `1 − a` times
 //! the current state — each weighted by `b / I`, so a chain whose states have density `I / b`
-//! deposits the image. *What* a state deposits is the recorder's business: splats on the film for
+//! deposits the image. PSSMLT and MMLT also count their large steps as independent samples of the
+//! image, combined with the chain by the balance heuristic (Kelemen et al. 2002 §4;
+//! [`LargeStepMis`]). *What* a state deposits is the recorder's business: splats on the film for
 //! the image-space methods, photons at storage points for Metropolis photon sampling.
 //!
 //! The driver gives each group of chains its own [`Sink::Chunk`] per round, fills them in
@@ -24,6 +26,10 @@ pub struct Contribution {
 pub trait Recordable {
     /// The contribution of the state as last evaluated.
     fn contribution(&self) -> &Contribution;
+    /// The driver's group of the state (MMLT: path length − 1); 0 unless a method has groups.
+    fn group(&self) -> usize {
+        0
+    }
 }
 
 /// Receives what chain states deposit.
@@ -50,10 +56,30 @@ pub struct ExpectedValue<'a, R> {
     pub recorder: &'a mut R,
     /// The normalisation `b`.
     pub b: f64,
+    /// Large steps combined with the chain by the balance heuristic, if any.
+    pub large_steps: Option<LargeStepMis<'a>>,
+}
+
+/// Kelemen et al. (2002) §4: a chain whose move kind `kind` is, with probability `probability`, an
+/// independent sample of unit density over its group's primary space yields two estimators of the
+/// image at once, the chain's (states of density `I / b_g`) and the large steps' (density
+/// `probability`). Combined by the balance heuristic, a state deposits `f / (I / b_g + p)` (times
+/// `b / b_g`, the chain's share of the image) with the expected-value weight, and a large step's
+/// candidate deposits that once more: where `I ≪ p b_g` the image comes from the independent
+/// samples, where `I ≫ p b_g` from the chain.
+#[derive(Clone, Copy, Debug)]
+pub struct LargeStepMis<'a> {
+    /// The move kind of the large steps.
+    pub kind: usize,
+    /// Their probability per proposal.
+    pub probability: f64,
+    /// The normalisation `b_g` of each group.
+    pub group_normalisation: &'a [f64],
 }
 
 impl<R> ExpectedValue<'_, R> {
-    /// Deposit `w` times the state's contribution, scaled by `b / I`.
+    /// Deposit `w` times the state's contribution, scaled by `b / I` (or, with large steps
+    /// combined, by `b / (I + p b_g)`).
     #[inline]
     pub fn record<S: Recordable>(&mut self, s: &S, w: f64)
     where
@@ -63,15 +89,19 @@ impl<R> ExpectedValue<'_, R> {
         if w <= 0.0 || !(i > 0.0) || !i.is_finite() {
             return;
         }
-        self.recorder.record(s, w * self.b / i);
+        let independent = self.large_steps.map_or(0.0, |l| {
+            l.probability * l.group_normalisation.get(s.group()).copied().unwrap_or(0.0)
+        });
+        self.recorder.record(s, w * self.b / (i + independent));
     }
 }
 
 impl<S: Recordable, R: Recorder<S>> Observer<S> for ExpectedValue<'_, R> {
     #[inline]
-    fn observe(&mut self, current: &S, proposed: &S, a: f64, _kind: usize) {
+    fn observe(&mut self, current: &S, proposed: &S, a: f64, kind: usize) {
+        let large = self.large_steps.is_some_and(|l| l.kind == kind);
         self.record(current, 1.0 - a);
-        self.record(proposed, a);
+        self.record(proposed, a + if large { 1.0 } else { 0.0 });
     }
 }
 

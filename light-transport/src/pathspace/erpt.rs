@@ -250,6 +250,7 @@ impl Estimator for Erpt {
         let mut rec = ExpectedValue {
             recorder: splats,
             b: self.quantum / n as f64,
+            large_steps: None,
         };
         for (state, e) in seeds {
             let count = (e / self.quantum + uniform(stream.rng())).floor() as u64;

@@ -21,6 +21,7 @@ pub const ENTRY: Entry = Entry {
                 heuristic: c.heuristic,
                 kelemen: m.kelemen()?,
                 importance: m.importance(),
+                large_step_mis: m.large_step_mis,
             },
             settings: m.settings(),
         }))

@@ -19,6 +19,7 @@ pub const ENTRY: Entry = Entry {
                 bdpt,
                 kelemen: m.kelemen()?,
                 importance: m.importance(),
+                large_step_mis: m.large_step_mis,
             },
             settings: m.settings(),
         }))
