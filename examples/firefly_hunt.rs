@@ -13,7 +13,7 @@
 //! by bisecting its pass count and replayed here.
 
 use light_transport::integrators::{Bdpt, Sampling, pass_stream};
-use light_transport::path::{MisHeuristic, Roulette, Vertex, VertexKind, WalkSettings};
+use light_transport::path::{MisHeuristic, Roulette, Subpath, Vertex, VertexKind, WalkSettings};
 use light_transport::sampler::PixelSampler;
 use light_transport::scene::{Scene, builtin, pbrt};
 use std::collections::BTreeMap;
@@ -79,7 +79,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let npix = scene.camera.width * scene.camera.height;
     let mut moments: BTreeMap<(usize, usize), Moments> = BTreeMap::new();
     let mut top: Vec<(f64, String)> = Vec::new();
-    let (mut camera, mut light) = (Vec::new(), Vec::new());
+    let (mut camera, mut light) = (Subpath::new(), Subpath::new());
     let sampling = Sampling {
         seed,
         sampler: PixelSampler::Sobol,

@@ -31,7 +31,7 @@ use light_transport::integrators::{
     mean_luminance, render,
 };
 use light_transport::path::{
-    MisHeuristic, Roulette, Vertex, WalkSettings, camera_subpath, connect, light_subpath,
+    MisHeuristic, Roulette, Subpath, WalkSettings, camera_subpath, connect, light_subpath,
     mis_weight,
 };
 use light_transport::sampler::{PixelSampler, PixelStream};
@@ -162,8 +162,8 @@ impl Estimator for BdptMissingStrategies {
         stream: &mut PixelStream,
         splats: &mut Vec<Splat>,
     ) -> Rgb {
-        let mut cam: Vec<Vertex> = Vec::new();
-        let mut light: Vec<Vertex> = Vec::new();
+        let mut cam = Subpath::new();
+        let mut light = Subpath::new();
         camera_subpath(
             scene,
             stream,

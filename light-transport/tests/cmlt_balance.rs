@@ -525,7 +525,7 @@ fn the_merge_probability_approximation_shrinks_with_the_radius() {
     // Emission from the light's centre: the light stream's choice/position numbers are fixed.
     let mut hits = Vec::with_capacity(n);
     let mut rng = stream(51, 0);
-    let mut sub = Vec::new();
+    let mut sub = light_transport::path::Subpath::new();
     let mut y = None;
     for _ in 0..n {
         let nums = [0.5, 0.5, 0.5, uniform(&mut rng), uniform(&mut rng)];

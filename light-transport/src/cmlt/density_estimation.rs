@@ -37,7 +37,7 @@
 use super::light_vertex_map::LightVertexMap;
 use super::technique::TechniqueChart;
 use crate::metropolis::ImportanceKind;
-use crate::path::{VertexKind, camera_subpath};
+use crate::path::{Subpath, VertexKind, camera_subpath};
 use crate::pathspace::PathState;
 use crate::sampler::ReplayStream;
 use crate::sampler::layout::{camera_numbers, light_numbers};
@@ -234,7 +234,7 @@ impl PointSampler<PathState> for MergeSampler<'_> {
         // The fresh camera subpath and its last vertex z_{t−1}.
         let nc = camera_numbers(t);
         let mut u: Vec<f64> = (0..nc).map(|_| uniform(rng)).collect();
-        let mut sub = Vec::with_capacity(t);
+        let mut sub = Subpath::new();
         camera_subpath(
             self.scene,
             &mut ReplayStream::new(&u, &[], &[]),

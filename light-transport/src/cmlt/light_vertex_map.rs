@@ -7,7 +7,7 @@
 //! Only vertices a merge may use are stored: surface points whose BSDF is not purely specular.
 
 use crate::math::DVec3;
-use crate::path::{VertexKind, light_subpath};
+use crate::path::{Subpath, VertexKind, light_subpath};
 use crate::sampler::{ReplayStream, layout::light_numbers};
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -62,7 +62,7 @@ impl LightVertexMap {
             .map(|chunk| {
                 let mut numbers = Vec::with_capacity(chunk.len() * stride);
                 let mut found = vec![Vec::new(); max_depth];
-                let mut sub = Vec::new();
+                let mut sub = Subpath::new();
                 for &j in chunk {
                     let mut rng = stream(seed, j as u64);
                     let start = numbers.len();
@@ -133,7 +133,7 @@ impl LightVertexMap {
             .par_chunks(CHUNK)
             .map(|chunk| {
                 let mut numbers = vec![0.0; len];
-                let mut sub = Vec::new();
+                let mut sub = Subpath::new();
                 let mut hits = Vec::new();
                 for &j in chunk {
                     Self::fresh_numbers(seed, j, &mut numbers);

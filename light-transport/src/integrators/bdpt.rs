@@ -11,7 +11,7 @@
 use super::shadow_roulette::ShadowRoulette;
 use super::{Estimator, Splat};
 use crate::path::{
-    MisHeuristic, Roulette, Vertex, WalkSettings, camera_subpath_with, connect_unoccluded,
+    MisHeuristic, Roulette, Subpath, Vertex, WalkSettings, camera_subpath_with, connect_unoccluded,
     light_subpath_with, mis_weight, unoccluded,
 };
 use crate::sampler::{PixelStream, SampleStream};
@@ -21,7 +21,7 @@ use mcmc_core::rng::ChainRng;
 use std::cell::RefCell;
 
 thread_local! {
-    static SUBPATHS: RefCell<(Vec<Vertex>, Vec<Vertex>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+    static SUBPATHS: RefCell<(Subpath, Subpath)> = const { RefCell::new((Subpath::new(), Subpath::new())) };
 }
 
 /// BDPT settings.
@@ -47,8 +47,8 @@ impl Bdpt {
         scene: &Scene,
         stream: &mut S,
         pixel: Option<usize>,
-        camera: &mut Vec<Vertex>,
-        light: &mut Vec<Vertex>,
+        camera: &mut Subpath,
+        light: &mut Subpath,
     ) {
         camera_subpath_with(
             scene,

@@ -3,14 +3,14 @@
 //! paths need `t ≥ 2`).
 
 use super::{Estimator, Splat};
-use crate::path::{Vertex, WalkSettings, camera_subpath, connect, light_subpath};
+use crate::path::{Subpath, WalkSettings, camera_subpath, connect, light_subpath};
 use crate::sampler::PixelStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use std::cell::RefCell;
 
 thread_local! {
-    static SUBPATHS: RefCell<(Vec<Vertex>, Vec<Vertex>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+    static SUBPATHS: RefCell<(Subpath, Subpath)> = const { RefCell::new((Subpath::new(), Subpath::new())) };
 }
 
 /// Light tracing settings.

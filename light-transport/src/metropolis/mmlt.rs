@@ -9,7 +9,7 @@ use super::importance::ImportanceKind;
 use super::pssmlt::{PrimaryState, mutate_primary};
 use super::stream::PrimaryStream;
 use crate::path::{
-    MisHeuristic, Vertex, WalkSettings, camera_subpath, connect, light_subpath, mis_weight,
+    MisHeuristic, Subpath, WalkSettings, camera_subpath, connect, light_subpath, mis_weight,
 };
 use crate::sampler::{CAMERA_STREAM, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
@@ -19,7 +19,7 @@ use mcmc_core::{Chain, ChainRng, Proposal};
 use std::cell::RefCell;
 
 thread_local! {
-    static SUBPATHS: RefCell<(Vec<Vertex>, Vec<Vertex>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+    static SUBPATHS: RefCell<(Subpath, Subpath)> = const { RefCell::new((Subpath::new(), Subpath::new())) };
 }
 
 /// MMLT settings.

@@ -13,7 +13,7 @@ use super::importance::ImportanceKind;
 use super::record::{Contribution, Recordable};
 use super::stream::PrimaryStream;
 use crate::integrators::Bdpt;
-use crate::path::Vertex;
+use crate::path::Subpath;
 use crate::sampler::{CAMERA_STREAM, STREAMS, layout};
 use crate::scene::Scene;
 use mcmc_core::kernel::Observer;
@@ -22,7 +22,7 @@ use mcmc_core::{Chain, ChainRng, Kernel, MetropolisHastings, Proposal, Proposed,
 use std::cell::RefCell;
 
 thread_local! {
-    static SUBPATHS: RefCell<(Vec<Vertex>, Vec<Vertex>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+    static SUBPATHS: RefCell<(Subpath, Subpath)> = const { RefCell::new((Subpath::new(), Subpath::new())) };
     /// The state a thread evaluates its bootstrap samples in ([`bootstrap_weight`]).
     static BOOTSTRAP: RefCell<Option<PrimaryState>> = const { RefCell::new(None) };
 }

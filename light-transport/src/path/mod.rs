@@ -5,6 +5,7 @@
 
 mod connect;
 mod mis;
+mod subpath;
 mod vertex;
 mod walk;
 
@@ -12,6 +13,7 @@ pub use connect::{
     Connection, End, GRAZING_COSINE, connect, connect_unoccluded, geometry, join, unoccluded,
 };
 pub use mis::{MisHeuristic, mis_weight};
+pub use subpath::Subpath;
 pub use vertex::{Vertex, VertexKind};
 pub use walk::{
     Roulette, WalkSettings, camera_ray, camera_subpath, camera_subpath_with, light_subpath,

@@ -4,6 +4,7 @@
 //! a subpath from that subpath's `b`-th vertex block. Subpaths are therefore deterministic
 //! functions of the stream, vertex by vertex.
 
+use super::subpath::Subpath;
 use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraSample;
@@ -127,7 +128,7 @@ pub fn camera_subpath<S: SampleStream>(
     stream: &mut S,
     max_vertices: usize,
     pixel: Option<usize>,
-    path: &mut Vec<Vertex>,
+    path: &mut Subpath,
 ) {
     camera_subpath_with(scene, stream, max_vertices, pixel, None, path);
 }
@@ -139,13 +140,12 @@ pub fn camera_subpath_with<S: SampleStream>(
     max_vertices: usize,
     pixel: Option<usize>,
     roulette: Option<Roulette>,
-    path: &mut Vec<Vertex>,
+    path: &mut Subpath,
 ) {
     path.clear();
     if max_vertices == 0 {
         return;
     }
-    // One allocation of the final size (growing a vector of large vertices moves them).
     path.reserve(max_vertices);
     let cs = camera_ray(scene, stream, pixel);
     path.push(Vertex {
@@ -181,7 +181,7 @@ pub fn light_subpath<S: SampleStream>(
     scene: &Scene,
     stream: &mut S,
     max_vertices: usize,
-    path: &mut Vec<Vertex>,
+    path: &mut Subpath,
 ) {
     light_subpath_with(scene, stream, max_vertices, None, path);
 }
@@ -192,13 +192,12 @@ pub fn light_subpath_with<S: SampleStream>(
     stream: &mut S,
     max_vertices: usize,
     roulette: Option<Roulette>,
-    path: &mut Vec<Vertex>,
+    path: &mut Subpath,
 ) {
     path.clear();
     if max_vertices == 0 {
         return;
     }
-    // One allocation of the final size (growing a vector of large vertices moves them).
     path.reserve(max_vertices);
     stream.start_stream(LIGHT_STREAM);
     stream.seek(layout::LIGHT_CHOICE);
@@ -266,7 +265,7 @@ fn random_walk<S: SampleStream>(
     stream: &mut S,
     endpoint_block: usize,
     roulette: Option<Roulette>,
-    path: &mut Vec<Vertex>,
+    path: &mut Subpath,
 ) {
     // Throughput of the first surface vertex (the roulette's reference).
     let mut beta_first = None;
@@ -278,19 +277,10 @@ fn random_walk<S: SampleStream>(
             break;
         };
         let prev = path.len() - 1;
-        path.push(Vertex {
-            kind: VertexKind::Surface,
-            point: hit.point,
-            wo: -ray.d,
-            bsdf: None,
-            beta,
-            delta: false,
-            pdf_fwd: 0.0,
-            pdf_rev: 0.0,
-        });
+        // The vertex and its BSDF are built in place (a vertex is large to copy).
+        let vert = path.push_surface(&hit.point, -ray.d, beta);
+        scene.bsdf_into(&hit.point, &mut vert.bsdf);
         let b = path.len() - 1;
-        // The BSDF is built in place (a vertex is large to copy).
-        scene.bsdf_into(&hit.point, &mut path[b].bsdf);
         path[b].pdf_fwd = path[prev].to_area(pdf_dir, &path[b], scene);
         if path.len() >= max_vertices {
             break;

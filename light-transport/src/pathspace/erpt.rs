@@ -18,7 +18,7 @@ use super::path::FullPath;
 use super::state::PathState;
 use crate::integrators::{Estimator, Splat};
 use crate::metropolis::ExpectedValue;
-use crate::path::{Vertex, camera_subpath, connect, light_subpath};
+use crate::path::{Subpath, camera_subpath, connect, light_subpath};
 use crate::sampler::{IndependentStream, PixelStream, SampleStream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -191,7 +191,7 @@ pub fn seed_paths(
     out: &mut Vec<(PathState, f64)>,
 ) {
     out.clear();
-    let (mut cam, mut light): (Vec<Vertex>, Vec<Vertex>) = (Vec::new(), Vec::new());
+    let (mut cam, mut light) = (Subpath::new(), Subpath::new());
     camera_subpath(scene, stream, m.max_edges + 1, Some(pixel), &mut cam);
     light_subpath(scene, stream, 1, &mut light);
     let mut path = FullPath::default();

@@ -11,7 +11,7 @@ use super::state::PathState;
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, SurfacePoint, offset_origin};
 use crate::math::{DVec3, Frame};
-use crate::path::{Vertex, VertexKind, camera_subpath, connect, light_subpath};
+use crate::path::{Subpath, Vertex, VertexKind, camera_subpath, connect, light_subpath};
 use crate::sampler::SampleStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -228,8 +228,8 @@ pub fn sample_path<S: SampleStream>(
     out: &mut PathState,
 ) -> Option<()> {
     thread_local! {
-        static BUFFERS: std::cell::RefCell<(Vec<Vertex>, Vec<Vertex>)> =
-            const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+        static BUFFERS: std::cell::RefCell<(Subpath, Subpath)> =
+            const { std::cell::RefCell::new((Subpath::new(), Subpath::new())) };
     }
     BUFFERS.with_borrow_mut(|(light, cam)| {
         let t = k + 1 - s;

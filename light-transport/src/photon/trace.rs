@@ -15,7 +15,7 @@
 //! directions.
 
 use super::map::Photon;
-use crate::path::{VertexKind, light_subpath};
+use crate::path::{Subpath, VertexKind, light_subpath};
 use crate::sampler::{IndependentStream, LIGHT_STREAM, SampleStream, layout};
 use crate::scene::Scene;
 use mcmc_core::rng::{uniform, uniform_index};
@@ -110,7 +110,7 @@ pub fn trace_photons(
         .into_par_iter()
         .map(|c| {
             let (mut global, mut caustic) = (Vec::new(), Vec::new());
-            let mut path = Vec::new();
+            let mut path = Subpath::new();
             for i in c * CHUNK..((c + 1) * CHUNK).min(paths) {
                 let mut stream = StratifiedStream {
                     inner: IndependentStream::new(mcmc_core::rng::stream(seed, i)),
