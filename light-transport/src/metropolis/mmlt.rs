@@ -89,6 +89,10 @@ impl Method for Mmlt {
         self.walk.max_edges
     }
 
+    fn details(&self) -> Vec<String> {
+        vec![super::record::LargeStepMis::report(self.large_step_mis)]
+    }
+
     fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (PrimaryState, f64) {
         let mut s = PrimaryState::new(self.kelemen, seed, g + 1);
         self.evaluate(scene, g + 1, &mut s);

@@ -10,7 +10,7 @@
 
 use super::driver::Method;
 use super::importance::ImportanceKind;
-use super::record::{Contribution, Recordable};
+use super::record::{Contribution, LargeStepMis, Recordable};
 use super::stream::PrimaryStream;
 use crate::integrators::Bdpt;
 use crate::path::Subpath;
@@ -179,7 +179,9 @@ impl Method for Pssmlt {
     type State = PrimaryState;
 
     fn details(&self) -> Vec<String> {
-        crate::path::Roulette::report(self.bdpt.roulette)
+        let mut lines = vec![LargeStepMis::report(self.large_step_mis)];
+        lines.extend(crate::path::Roulette::report(self.bdpt.roulette));
+        lines
     }
 
     fn groups(&self) -> usize {

@@ -77,6 +77,18 @@ pub struct LargeStepMis<'a> {
     pub group_normalisation: &'a [f64],
 }
 
+impl LargeStepMis<'_> {
+    /// The summary line of a method whose large steps are (`on`) or are not counted as
+    /// independent samples too.
+    pub fn report(on: bool) -> String {
+        if on {
+            "large step counted twice: as a proposal and as an independent sample (balance heuristic; --large-step-mis)".into()
+        } else {
+            "large step counted as a proposal only (expected values; --large-step-mis false)".into()
+        }
+    }
+}
+
 impl<R> ExpectedValue<'_, R> {
     /// Deposit `w` times the state's contribution, scaled by `b / I` (or, with large steps
     /// combined, by `b / (I + p b_g)`).
