@@ -102,6 +102,10 @@ impl<R> ExpectedValue<'_, R> {
             return;
         }
         let independent = self.large_steps.map_or(0.0, |l| {
+            debug_assert!(
+                s.group() < l.group_normalisation.len(),
+                "a state outside the groups"
+            );
             l.probability * l.group_normalisation.get(s.group()).copied().unwrap_or(0.0)
         });
         self.recorder.record(s, w * self.b / (i + independent));
@@ -111,7 +115,10 @@ impl<R> ExpectedValue<'_, R> {
 impl<S: Recordable, R: Recorder<S>> Observer<S> for ExpectedValue<'_, R> {
     #[inline]
     fn observe(&mut self, current: &S, proposed: &S, a: f64, kind: usize) {
-        let large = self.large_steps.is_some_and(|l| l.kind == kind);
+        // A proposal that could not be made is observed as the current state proposed to itself
+        // (`Chain::fail`): no independent sample was drawn, so it does not count as one.
+        let large =
+            self.large_steps.is_some_and(|l| l.kind == kind) && !std::ptr::eq(current, proposed);
         self.record(current, 1.0 - a);
         self.record(proposed, a + if large { 1.0 } else { 0.0 });
     }
@@ -144,5 +151,50 @@ impl<S: Recordable> Sink<S> for Film {
 
     fn mutations_done(&mut self, mutations: u64, pixels: f64) {
         self.splat_scale = mutations as f64 / pixels;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spectrum::Rgb;
+
+    struct State(Contribution);
+
+    impl Recordable for State {
+        fn contribution(&self) -> &Contribution {
+            &self.0
+        }
+    }
+
+    fn state() -> State {
+        State(Contribution {
+            splats: vec![([0.5, 0.5], Rgb::splat(2.0))],
+            importance: 2.0,
+        })
+    }
+
+    /// A large step that was made deposits the candidate once more (its independent sample); one
+    /// that could not be made (the current state observed against itself) does not.
+    #[test]
+    fn only_a_large_step_that_was_made_counts_as_an_independent_sample() {
+        let b = [1.0];
+        let mut splats = Vec::new();
+        let mut rec = ExpectedValue {
+            recorder: &mut splats,
+            b: 1.0,
+            large_steps: Some(LargeStepMis {
+                kind: 1,
+                probability: 0.5,
+                group_normalisation: &b,
+            }),
+        };
+        let (x, y) = (state(), state());
+        rec.observe(&x, &y, 0.0, 1); // made and rejected: x with 1 − a, y as a sample
+        rec.observe(&x, &x, 0.0, 1); // not made: x with 1 − a only
+        rec.observe(&x, &y, 0.0, 0); // a small step, rejected: x only
+        // Each deposit is 2 · b / (I + p b_0) = 2 / 2.5.
+        let values: Vec<f64> = splats.iter().map(|s| s.1.max_component()).collect();
+        assert_eq!(values, [0.8; 4]);
     }
 }
