@@ -101,13 +101,10 @@ impl<R> ExpectedValue<'_, R> {
         if w <= 0.0 || !(i > 0.0) || !i.is_finite() {
             return;
         }
-        let independent = self.large_steps.map_or(0.0, |l| {
-            debug_assert!(
-                s.group() < l.group_normalisation.len(),
-                "a state outside the groups"
-            );
-            l.probability * l.group_normalisation.get(s.group()).copied().unwrap_or(0.0)
-        });
+        // A state's group is one of the driver's (a method's invariant, not input).
+        let independent = self
+            .large_steps
+            .map_or(0.0, |l| l.probability * l.group_normalisation[s.group()]);
         self.recorder.record(s, w * self.b / (i + independent));
     }
 }
