@@ -7,6 +7,8 @@
 //!   group and two; a wrong probability, the wrong move kind or one group's `b_g` for all is
 //!   caught.
 //! * A sampler that is not a deterministic function of its numbers is refused (replay check).
+//! * PSSMLT and MMLT with direct lighting rendered apart converge to BDPT too;
+//!   direct light counted twice is caught; a render stopped in the direct pass keeps its work.
 //! * PSSMLT and MMLT converge to the BDPT image on every built-in scene, and a PSSMLT whose
 //!   recording uses another importance than its chains (a known cause of too-dark MLT images) is
 //!   caught.
@@ -18,19 +20,20 @@ mod common;
 
 use common::{ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, metropolis_runs, min_p, settings};
 use light_transport::Budget;
-use light_transport::film::Image;
+use light_transport::film::{Film, Image};
 use light_transport::integrators::Bdpt;
 use light_transport::metropolis::{
-    self, Contribution, ImportanceKind, Method, MetropolisSettings, Mmlt, PrimaryState, Pssmlt,
-    Seeding, mutate_primary,
+    self, Contribution, DIRECT_EDGES, ImportanceKind, Method, MetropolisSettings, Mmlt,
+    PrimaryState, Pssmlt, Seeding, SeparateDirect, mutate_primary,
 };
 use light_transport::path::{MisHeuristic, Roulette, WalkSettings};
+use light_transport::renderer::{Control, Metropolis, Progress, Renderer};
 use light_transport::scene::{Scene, builtin};
 use light_transport::spectrum::Rgb;
 use mcmc_core::kernel::Observer;
 use mcmc_core::primary_sample::{Kelemen, LARGE_STEP, PrimarySample, SMALL_STEP};
 use mcmc_core::{Chain, ChainRng};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 // ---------------------------------------------------------------------------------------------
 // A 1D toy: pixel j of a 32×1 film should equal the mean of f over [j/32, (j+1)/32).
@@ -314,6 +317,7 @@ fn pssmlt(importance: ImportanceKind) -> Pssmlt {
         kelemen: Kelemen::default(),
         importance,
         large_step_mis: true,
+        direct_apart: false,
     }
 }
 
@@ -327,6 +331,7 @@ fn mmlt() -> Mmlt {
         kelemen: Kelemen::default(),
         importance: ImportanceKind::Luminance,
         large_step_mis: true,
+        direct_apart: false,
     }
 }
 
@@ -378,6 +383,136 @@ fn pssmlt_and_mmlt_converge_to_bdpt_on_every_builtin_scene() {
             "{name}: MMLT disagrees with BDPT (p = {p2:.2e})"
         );
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Direct lighting apart from MMLT's chains (`SeparateDirect`).
+
+/// `runs` renders of `renderer` with 32 mutations per pixel, seeds 77, 78, …, as 6×6 blocks.
+fn renderer_runs(scene: &Scene, renderer: &dyn Renderer, runs: u64) -> Vec<Vec<f64>> {
+    (0..runs)
+        .map(|r| {
+            let mut go_on = |_: &Film, _: &Progress| true;
+            let mut control = Control {
+                progress: &mut go_on,
+                stop: None,
+            };
+            let (film, report) = renderer
+                .render(scene, Budget::SamplesPerPixel(32.0), 77 + r, &mut control)
+                .unwrap();
+            assert_eq!(film.discarded, 0);
+            assert!(!report.interrupted);
+            blocks(&Image::from_film(&film))
+        })
+        .collect()
+}
+
+/// PSSMLT and MMLT with the paths of at most two edges rendered apart by the direct-lighting
+/// pass converge to BDPT on every built-in scene
+/// (Welch per 6×6 block, Holm, `ALPHA` per scene and method). The test of the test: MMLT chains
+/// that keep every path while the pass renders direct lighting too (counted twice) are caught on
+/// cornell.
+#[test]
+fn pssmlt_and_mmlt_with_direct_lighting_apart_converge_to_bdpt() {
+    let settings = settings(20_000, 32.0, 77);
+    let separate =
+        SeparateDirect::new(mmlt(), settings, MisHeuristic::Power, 4, 0.2).expect("a direct pass");
+    assert!(separate.chains.method.direct_apart);
+    let pssmlt = SeparateDirect::new(
+        pssmlt(ImportanceKind::Luminance),
+        settings,
+        MisHeuristic::Power,
+        4,
+        0.2,
+    )
+    .expect("a direct pass");
+    for name in builtin::BUILTIN {
+        let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((W, H))).unwrap();
+        let reference = bdpt_batches(&scene);
+        let p1 = min_p(&renderer_runs(&scene, &pssmlt, 8), &reference);
+        let p2 = min_p(&renderer_runs(&scene, &separate, 8), &reference);
+        println!("{name}: with direct lighting apart PSSMLT p = {p1:.3e}, MMLT p = {p2:.3e}");
+        assert!(
+            p1 > ALPHA,
+            "{name}: PSSMLT with direct lighting apart disagrees with BDPT (p = {p1:.2e})"
+        );
+        assert!(
+            p2 > ALPHA,
+            "{name}: MMLT with direct lighting apart disagrees with BDPT (p = {p2:.2e})"
+        );
+    }
+    let twice = SeparateDirect {
+        chains: Metropolis {
+            method: Mmlt {
+                direct_apart: false,
+                ..mmlt()
+            },
+            settings,
+        },
+        ..separate
+    };
+    let scene = Scene::new(&builtin::builtin("cornell").unwrap(), Some((W, H))).unwrap();
+    let p = min_p(&renderer_runs(&scene, &twice, 8), &bdpt_batches(&scene));
+    println!("cornell: direct light counted twice p = {p:.3e}");
+    assert!(
+        p < ALPHA,
+        "direct light counted twice was not caught (p = {p:.2e})"
+    );
+}
+
+/// A direct pass needs longer paths left for the chains.
+#[test]
+fn a_direct_pass_without_longer_paths_is_refused() {
+    let short = Mmlt {
+        walk: WalkSettings {
+            max_edges: DIRECT_EDGES,
+        },
+        ..mmlt()
+    };
+    let err = SeparateDirect::new(short, settings(100, 1.0, 1), MisHeuristic::Power, 16, 0.2)
+        .err()
+        .expect("refused");
+    assert!(err.to_string().contains("longer than 2 edges"), "{err}");
+    for (spp, share) in [(0, 0.2), (16, 0.0), (16, 1.0), (16, f64::NAN)] {
+        assert!(
+            SeparateDirect::new(
+                mmlt(),
+                settings(100, 1.0, 1),
+                MisHeuristic::Power,
+                spp,
+                share
+            )
+            .is_err(),
+            "{spp} samples per pixel, share {share}"
+        );
+    }
+}
+
+/// A render stopped during the direct pass returns the pass's film, marked interrupted, without
+/// running the chains.
+#[test]
+fn a_render_stopped_in_the_direct_pass_keeps_its_work() {
+    let scene = Scene::new(&builtin::builtin("cornell").unwrap(), Some((W, H))).unwrap();
+    let separate =
+        SeparateDirect::new(mmlt(), settings(1000, 4.0, 1), MisHeuristic::Power, 64, 0.2)
+            .expect("a direct pass");
+    let stop = AtomicBool::new(true);
+    let mut go_on = |_: &Film, _: &Progress| true;
+    let mut control = Control {
+        progress: &mut go_on,
+        stop: Some(&stop),
+    };
+    let (film, report) = separate
+        .render(&scene, Budget::SamplesPerPixel(4.0), 1, &mut control)
+        .unwrap();
+    assert!(report.interrupted);
+    assert_eq!(report.samples, 0, "no chain ran");
+    let samples = film.camera_samples();
+    assert!(
+        samples >= (W * H) as f64 && samples < (64 * W * H) as f64,
+        "{samples} camera samples: one pass or more, not all 64"
+    );
+    assert!(Image::from_film(&film).mean().luminance() > 0.0);
 }
 
 /// Bootstrap with the max-component importance, chains and recording with luminance: the

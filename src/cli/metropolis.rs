@@ -35,6 +35,16 @@ pub struct MetropolisArgs {
     /// false: expected values alone.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     pub large_step_mis: bool,
+    /// PSSMLT and MMLT: samples per pixel (with --spp) of a pass that renders the paths of at most
+    /// two edges apart from the chains (emitters seen directly or in a mirror, direct
+    /// illumination; Mitsuba 0.6's separateDirect; README). The chains then sample longer paths
+    /// only. 0: no such pass, chains on every path (also when --max-depth leaves no longer paths).
+    #[arg(long, default_value_t = 16)]
+    pub direct_samples: usize,
+    /// PSSMLT and MMLT: the share of a --time budget the direct-lighting pass runs for (the chains run for
+    /// the rest).
+    #[arg(long, default_value_t = 0.2)]
+    pub direct_share: f64,
     /// Small-step kernel.
     #[arg(long, value_enum, default_value_t = SmallStepKind::Exponential)]
     pub small_step: SmallStepKind,

@@ -1,8 +1,9 @@
 //! Next-event estimation (Veach & Guibas 1995): one light sample at a surface point, weighted by
-//! MIS against BSDF sampling. Shared by path tracing and the photon mapper's final gather.
+//! MIS against BSDF sampling, and its counterpart, emission reached by a BSDF-sampled ray. Shared
+//! by path tracing, the direct-lighting pass and the photon mapper's final gather.
 
 use crate::bsdf::{Bsdf, TransportMode};
-use crate::geometry::SurfacePoint;
+use crate::geometry::{Hit, SurfacePoint};
 use crate::light::LightKind;
 use crate::math::DVec3;
 use crate::path::MisHeuristic;
@@ -85,4 +86,34 @@ pub fn next_event(
         return Rgb::BLACK;
     }
     value * boost
+}
+
+/// Radiance emitted toward `wo` at `hit`, reached by a ray that BSDF sampling drew with solid-angle
+/// density `bsdf_pdf`, weighted by MIS against next-event estimation of the same point (`None`:
+/// reached by a camera ray or through a delta lobe, which next-event estimation cannot sample;
+/// weight 1). Black where `hit` is not on an emitter.
+#[inline]
+pub fn emitted(
+    scene: &Scene,
+    hit: &Hit,
+    wo: DVec3,
+    bsdf_pdf: Option<f64>,
+    heuristic: MisHeuristic,
+) -> Rgb {
+    let p = &hit.point;
+    let Some((li, light)) = scene.light_at(p.primitive) else {
+        return Rgb::BLACK;
+    };
+    let le = light.radiance(p.n, wo);
+    if le.is_black() {
+        return le;
+    }
+    match bsdf_pdf {
+        None => le,
+        Some(pdf) => {
+            let pdf_light = scene.light_distribution.pdf(li) * light.pdf_position() * hit.t * hit.t
+                / p.n.dot(wo).abs();
+            le * mis(pdf, pdf_light, heuristic)
+        }
+    }
 }

@@ -19,11 +19,13 @@
 
 mod bdpt;
 pub mod direct;
+mod direct_lighting;
 mod lt;
 mod pt;
 pub mod shadow_roulette;
 
 pub use bdpt::{Bdpt, Strategy};
+pub use direct_lighting::DirectLighting;
 pub use lt::LightTracer;
 pub use pt::PathTracer;
 pub use shadow_roulette::{ShadowRoulette, mean_luminance};

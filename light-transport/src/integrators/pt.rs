@@ -4,7 +4,7 @@
 //! ([`super::shadow_roulette`]). Written independently of the bidirectional path machinery so the
 //! two check each other.
 
-use super::direct::{mis, next_event};
+use super::direct::{emitted, next_event};
 use super::shadow_roulette::ShadowRoulette;
 use super::{Estimator, Splat};
 use crate::bsdf::TransportMode;
@@ -74,20 +74,14 @@ impl Estimator for PathTracer {
             let p = hit.point;
             let wo = -ray.d;
             // Emission reached by the path: `bounces + 1` edges.
-            if let Some((li, light)) = scene.light_at(p.primitive) {
-                let le = light.radiance(p.n, wo);
-                if !le.is_black() {
-                    let w = if specular {
-                        1.0
-                    } else {
-                        let pdf_light =
-                            scene.light_distribution.pdf(li) * light.pdf_position() * hit.t * hit.t
-                                / p.n.dot(wo).abs();
-                        mis(last_pdf, pdf_light, self.heuristic)
-                    };
-                    l += beta * le * w;
-                }
-            }
+            l += beta
+                * emitted(
+                    scene,
+                    &hit,
+                    wo,
+                    (!specular).then_some(last_pdf),
+                    self.heuristic,
+                );
             if bounces + 2 > self.max_edges {
                 break;
             }

@@ -3,6 +3,9 @@
 //! number of the technique stream (a coordinate Kelemen mutations perturb like any other), and
 //! contributes its MIS-weighted value divided by the probability of choosing the strategy. Paths of
 //! one edge use `(0, 2)` only (as in BDPT).
+//!
+//! With [`Mmlt::direct_apart`] the chains leave the paths of at most two edges to a direct pass
+//! ([`super::SeparateDirect`]): their path lengths get no bootstrap weight, hence no chains.
 
 use super::driver::Method;
 use super::importance::ImportanceKind;
@@ -37,9 +40,17 @@ pub struct Mmlt {
     /// the chains by the balance heuristic (Kelemen et al. 2002 §4;
     /// [`super::record::LargeStepMis`]).
     pub large_step_mis: bool,
+    /// Whether the paths of at most [`super::DIRECT_EDGES`] edges are left to a direct pass: the
+    /// image of this method alone then lacks them ([`super::SeparateDirect`]).
+    pub direct_apart: bool,
 }
 
 impl Mmlt {
+    /// Whether the chains sample some paths of `k` edges.
+    fn samples_length(&self, k: usize) -> bool {
+        !(self.direct_apart && k <= super::DIRECT_EDGES)
+    }
+
     /// Number of strategies for paths of `k` edges.
     pub fn strategies(k: usize) -> usize {
         if k == 1 { 1 } else { k + 1 }
@@ -82,6 +93,18 @@ impl Mmlt {
     }
 }
 
+impl super::DirectApart for Mmlt {
+    fn without_direct(self) -> Self {
+        Self {
+            direct_apart: true,
+            ..self
+        }
+    }
+    fn max_edges(&self) -> usize {
+        self.walk.max_edges
+    }
+}
+
 impl Method for Mmlt {
     type State = PrimaryState;
 
@@ -95,12 +118,18 @@ impl Method for Mmlt {
 
     fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (PrimaryState, f64) {
         let mut s = PrimaryState::new(self.kelemen, seed, g + 1);
+        if !self.samples_length(g + 1) {
+            return (s, 0.0);
+        }
         self.evaluate(scene, g + 1, &mut s);
         let w = s.contribution.importance;
         (s, w)
     }
 
     fn independent_weight(&self, scene: &Scene, g: usize, seed: u64) -> f64 {
+        if !self.samples_length(g + 1) {
+            return 0.0;
+        }
         super::pssmlt::bootstrap_weight(self.kelemen, seed, g + 1, |s| {
             self.evaluate(scene, g + 1, s)
         })

@@ -16,6 +16,7 @@ mod importance;
 mod mmlt;
 mod pssmlt;
 pub mod record;
+pub mod separate_direct;
 mod stream;
 
 pub use driver::{Method, MetropolisSettings, MetropolisStats, Seeding, run, run_with};
@@ -23,4 +24,5 @@ pub use importance::ImportanceKind;
 pub use mmlt::Mmlt;
 pub use pssmlt::{PrimaryProposal, PrimaryState, PrimaryTarget, Pssmlt, mutate_primary};
 pub use record::{Contribution, ExpectedValue, Recordable, Recorder, Sink};
+pub use separate_direct::{DIRECT_EDGES, DirectApart, SeparateDirect};
 pub use stream::PrimaryStream;

@@ -11,11 +11,13 @@
 use super::driver::Method;
 use super::importance::ImportanceKind;
 use super::record::{Contribution, LargeStepMis, Recordable};
+use super::separate_direct::{DIRECT_EDGES, DirectApart};
 use super::stream::PrimaryStream;
 use crate::integrators::Bdpt;
 use crate::path::Subpath;
 use crate::sampler::{CAMERA_STREAM, STREAMS, layout};
 use crate::scene::Scene;
+use crate::spectrum::Rgb;
 use mcmc_core::kernel::Observer;
 use mcmc_core::primary_sample::{Kelemen, LARGE_STEP, PrimarySample};
 use mcmc_core::{Chain, ChainRng, Kernel, MetropolisHastings, Proposal, Proposed, Target};
@@ -96,6 +98,9 @@ pub struct Pssmlt {
     /// Large steps count as independent samples of the image too, combined with the chain by
     /// the balance heuristic (Kelemen et al. 2002 §4; [`super::record::LargeStepMis`]).
     pub large_step_mis: bool,
+    /// Whether the paths of at most [`DIRECT_EDGES`] edges are left to a direct pass: the image of
+    /// this method alone then lacks them ([`super::SeparateDirect`]).
+    pub direct_apart: bool,
 }
 
 impl Pssmlt {
@@ -107,9 +112,22 @@ impl Pssmlt {
             let mut stream = PrimaryStream::new(&mut state.sample);
             self.bdpt
                 .trace_subpaths(scene, &mut stream, None, cam, light);
-            let own = self
-                .bdpt
-                .evaluate(scene, light, cam, &mut state.contribution.splats, None);
+            let splats = &mut state.contribution.splats;
+            let own = if self.direct_apart {
+                let mut own = Rgb::BLACK;
+                self.bdpt.strategies(scene, light, cam, None, |c| {
+                    if c.s + c.t - 1 <= DIRECT_EDGES {
+                        return;
+                    }
+                    match c.raster {
+                        Some(r) => splats.push((r, c.value)),
+                        None => own += c.value,
+                    }
+                });
+                own
+            } else {
+                self.bdpt.evaluate(scene, light, cam, splats, None)
+            };
             let raster = scene.camera.raster_of_film([
                 state.sample.get(CAMERA_STREAM, layout::FILM),
                 state.sample.get(CAMERA_STREAM, layout::FILM + 1),
@@ -172,6 +190,18 @@ pub fn mutate_primary<O: Observer<PrimaryState>>(
     let mut mh = MetropolisHastings::new(PrimaryTarget { scene, eval }, PrimaryProposal(kelemen));
     for _ in 0..n {
         mh.step(chain, rng, observer);
+    }
+}
+
+impl DirectApart for Pssmlt {
+    fn without_direct(self) -> Self {
+        Self {
+            direct_apart: true,
+            ..self
+        }
+    }
+    fn max_edges(&self) -> usize {
+        self.bdpt.walk.max_edges
     }
 }
 

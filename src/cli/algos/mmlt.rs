@@ -1,7 +1,7 @@
 //! Multiplexed MLT.
 
 use crate::cli::registry::Entry;
-use light_transport::metropolis::Mmlt;
+use light_transport::metropolis::{DIRECT_EDGES, Mmlt, SeparateDirect};
 use light_transport::path::WalkSettings;
 use light_transport::renderer::Metropolis;
 
@@ -13,16 +13,27 @@ pub const ENTRY: Entry = Entry {
     passes: false,
     build: |_, c, a| {
         let m = &a.metropolis;
-        Ok(Box::new(Metropolis {
-            method: Mmlt {
-                walk: WalkSettings {
-                    max_edges: c.max_edges,
-                },
-                heuristic: c.heuristic,
-                kelemen: m.kelemen()?,
-                importance: m.importance(),
-                large_step_mis: m.large_step_mis,
+        let method = Mmlt {
+            walk: WalkSettings {
+                max_edges: c.max_edges,
             },
+            heuristic: c.heuristic,
+            kelemen: m.kelemen()?,
+            importance: m.importance(),
+            large_step_mis: m.large_step_mis,
+            direct_apart: false,
+        };
+        if m.direct_samples > 0 && c.max_edges > DIRECT_EDGES {
+            return Ok(Box::new(SeparateDirect::new(
+                method,
+                m.settings(),
+                c.heuristic,
+                m.direct_samples,
+                m.direct_share,
+            )?));
+        }
+        Ok(Box::new(Metropolis {
+            method,
             settings: m.settings(),
         }))
     },
