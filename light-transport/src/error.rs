@@ -40,6 +40,14 @@ pub enum Error {
     /// A scene is invalid as a whole (no camera, no light, …).
     #[error("invalid scene: {0}")]
     InvalidScene(String),
+    /// No bootstrap path of a Metropolis method carried light.
+    #[error(
+        "invalid scene: no light reached the camera in {paths} bootstrap paths: nothing to render (raise --bootstrap, or check the lights)"
+    )]
+    NoLight {
+        /// Bootstrap paths tried.
+        paths: usize,
+    },
     /// A user-given parameter is out of range.
     #[error("invalid parameter `{name}`: {reason}")]
     InvalidParameter {

@@ -515,6 +515,65 @@ fn a_render_stopped_in_the_direct_pass_keeps_its_work() {
     assert!(Image::from_film(&film).mean().luminance() > 0.0);
 }
 
+/// A scene lit only directly (a point light over a single floor: no path of three edges) renders
+/// with the direct pass alone, saying so, where the chains alone find no light to run on.
+#[test]
+fn a_scene_without_longer_paths_renders_with_the_direct_pass_alone() {
+    let text = r#"
+LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective" "float fov" 45
+WorldBegin
+LightSource "point" "point from" [ 0 0 3 ] "rgb I" [ 10 10 10 ]
+Material "matte"
+Shape "trianglemesh" "integer indices" [ 0 1 2 0 2 3 ] "point P" [ -5 -5 0 5 -5 0 5 5 0 -5 5 0 ]
+WorldEnd
+"#;
+    let desc =
+        light_transport::scene::pbrt::load_str(text, std::path::Path::new("."), "floor.pbrt")
+            .unwrap();
+    let scene = Scene::new(&desc, Some((W, H))).unwrap();
+    let mut go_on = |_: &Film, _: &Progress| true;
+    let mut control = Control {
+        progress: &mut go_on,
+        stop: None,
+    };
+    let chains_alone = Metropolis {
+        method: mmlt(),
+        settings: settings(1000, 1.0, 1),
+    };
+    let separate = SeparateDirect::new(mmlt(), settings(1000, 1.0, 1), MisHeuristic::Power, 4, 0.2)
+        .expect("a direct pass");
+    let (film, report) = separate
+        .render(&scene, Budget::SamplesPerPixel(1.0), 1, &mut control)
+        .unwrap();
+    assert!(Image::from_film(&film).mean().luminance() > 0.0);
+    assert!(
+        report.details.iter().any(|l| l.contains("chains     none")),
+        "{:?}",
+        report.details
+    );
+    let without_chains = Metropolis {
+        method: Mmlt {
+            direct_apart: true,
+            ..mmlt()
+        },
+        settings: settings(1000, 1.0, 1),
+    };
+    let err = without_chains
+        .render(&scene, Budget::SamplesPerPixel(1.0), 1, &mut control)
+        .expect_err("no light for the chains");
+    assert!(
+        matches!(err, light_transport::Error::NoLight { .. }),
+        "{err}"
+    );
+    // The chains on every path length do find the direct light.
+    assert!(
+        chains_alone
+            .render(&scene, Budget::SamplesPerPixel(1.0), 1, &mut control)
+            .is_ok()
+    );
+}
+
 /// Bootstrap with the max-component importance, chains and recording with luminance: the
 /// normalisation belongs to another importance than the chains sample (a bug that renders
 /// coloured scenes too bright or too dark).

@@ -314,9 +314,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     stats.bootstrap_time = t.elapsed();
     method.bootstrap_done(&stats.group_normalisation);
     if !(stats.normalisation > 0.0) {
-        return Err(Error::InvalidScene(format!(
-            "no light reached the camera in {n} bootstrap paths: nothing to render (raise --bootstrap, or check the lights)"
-        )));
+        return Err(Error::NoLight { paths: n });
     }
     // 2. Seeding by systematic resampling, with the replay check.
     let t = Instant::now();

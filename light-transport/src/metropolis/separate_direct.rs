@@ -13,7 +13,7 @@
 
 use super::driver::{Method, MetropolisSettings};
 use crate::budget::Budget;
-use crate::film::Film;
+use crate::film::{Film, Image};
 use crate::integrators::DirectLighting;
 use crate::path::MisHeuristic;
 use crate::renderer::{Control, Metropolis, Passes, Progress, Renderer, Report};
@@ -158,9 +158,35 @@ impl<M: Method> Renderer for SeparateDirect<M> {
             progress: &mut progress,
             stop: control.stop,
         };
-        let (chains, mut report) =
-            self.chains
-                .render(scene, chain_budget, seed, &mut chain_control)?;
+        let (chains, mut report) = match self.chains.render(
+            scene,
+            chain_budget,
+            seed,
+            &mut chain_control,
+        ) {
+            // No longer path carried light in the bootstrap: its estimate of them is 0, and
+            // the image is the direct pass's (unless that is black too).
+            Err(Error::NoLight { paths })
+                if Image::from_film(&direct).mean().max_component() > 0.0 =>
+            {
+                let report = Report {
+                    samples_per_pixel: direct_report.samples_per_pixel,
+                    samples: direct_report.samples,
+                    elapsed: start.elapsed(),
+                    details: vec![
+                        direct_line,
+                        format!(
+                            "chains     none: no path longer than {DIRECT_EDGES} edges carried light in {paths} bootstrap paths"
+                        ),
+                    ],
+                    discarded: direct.discarded,
+                    rays: direct_report.rays,
+                    ..Report::default()
+                };
+                return Ok((direct, report));
+            }
+            other => other?,
+        };
         let mut film = direct.clone();
         film.merge(&chains);
         report.details.insert(0, direct_line);
