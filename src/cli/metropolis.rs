@@ -2,7 +2,11 @@
 
 use super::CliError;
 use clap::{Args, ValueEnum};
-use light_transport::metropolis::{ImportanceKind, MetropolisSettings};
+use light_transport::metropolis::{
+    DIRECT_EDGES, DirectApart, ImportanceKind, MetropolisSettings, SeparateDirect,
+};
+use light_transport::path::MisHeuristic;
+use light_transport::renderer::{Metropolis, Renderer};
 use mcmc_core::primary_sample::Kelemen;
 use mcmc_core::proposals::SmallStep;
 /// Small-step kernel.
@@ -91,6 +95,30 @@ impl MetropolisArgs {
             Importance::Luminance => ImportanceKind::Luminance,
             Importance::Max => ImportanceKind::MaxComponent,
         }
+    }
+
+    /// `method` on the shared driver as a renderer, with its direct lighting rendered apart
+    /// (`--direct-samples`, `--direct-share`) unless that is off or `max_edges` leaves the chains
+    /// no longer paths.
+    pub fn renderer<M: DirectApart + 'static>(
+        &self,
+        method: M,
+        heuristic: MisHeuristic,
+        max_edges: usize,
+    ) -> Result<Box<dyn Renderer>, CliError> {
+        if self.direct_samples > 0 && max_edges > DIRECT_EDGES {
+            return Ok(Box::new(SeparateDirect::new(
+                method,
+                self.settings(),
+                heuristic,
+                self.direct_samples,
+                self.direct_share,
+            )?));
+        }
+        Ok(Box::new(Metropolis {
+            method,
+            settings: self.settings(),
+        }))
     }
 
     /// Driver settings (the budget and seed come with each render).

@@ -1,9 +1,8 @@
 //! Multiplexed MLT.
 
 use crate::cli::registry::Entry;
-use light_transport::metropolis::{DIRECT_EDGES, Mmlt, SeparateDirect};
+use light_transport::metropolis::Mmlt;
 use light_transport::path::WalkSettings;
-use light_transport::renderer::Metropolis;
 
 /// Multiplexed MLT (Hachisuka, Kaplanyan & Dachsbacher 2014).
 pub const ENTRY: Entry = Entry {
@@ -23,18 +22,6 @@ pub const ENTRY: Entry = Entry {
             large_step_mis: m.large_step_mis,
             direct_apart: false,
         };
-        if m.direct_samples > 0 && c.max_edges > DIRECT_EDGES {
-            return Ok(Box::new(SeparateDirect::new(
-                method,
-                m.settings(),
-                c.heuristic,
-                m.direct_samples,
-                m.direct_share,
-            )?));
-        }
-        Ok(Box::new(Metropolis {
-            method,
-            settings: m.settings(),
-        }))
+        m.renderer(method, c.heuristic, c.max_edges)
     },
 };

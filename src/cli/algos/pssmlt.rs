@@ -1,8 +1,7 @@
 //! Primary-sample-space MLT.
 
 use crate::cli::registry::Entry;
-use light_transport::metropolis::{DIRECT_EDGES, Pssmlt, SeparateDirect};
-use light_transport::renderer::Metropolis;
+use light_transport::metropolis::Pssmlt;
 
 /// PSSMLT (Kelemen et al. 2002) on BDPT with all connections.
 pub const ENTRY: Entry = Entry {
@@ -21,18 +20,6 @@ pub const ENTRY: Entry = Entry {
             large_step_mis: m.large_step_mis,
             direct_apart: false,
         };
-        if m.direct_samples > 0 && c.max_edges > DIRECT_EDGES {
-            return Ok(Box::new(SeparateDirect::new(
-                method,
-                m.settings(),
-                c.heuristic,
-                m.direct_samples,
-                m.direct_share,
-            )?));
-        }
-        Ok(Box::new(Metropolis {
-            method,
-            settings: m.settings(),
-        }))
+        m.renderer(method, c.heuristic, c.max_edges)
     },
 };
