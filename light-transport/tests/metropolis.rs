@@ -7,8 +7,9 @@
 //!   group and two; a wrong probability, the wrong move kind or one group's `b_g` for all is
 //!   caught.
 //! * A sampler that is not a deterministic function of its numbers is refused (replay check).
-//! * PSSMLT and MMLT with direct lighting rendered apart converge to BDPT too;
-//!   direct light counted twice is caught; a render stopped in the direct pass keeps its work.
+//! * PSSMLT, MMLT, path-space MLT, MEMLT and CMLT with direct lighting rendered apart converge to
+//!   BDPT too; direct light counted twice is caught (MMLT, MLT); a render stopped in the direct
+//!   pass keeps its work.
 //! * PSSMLT and MMLT converge to the BDPT image on every built-in scene, and a PSSMLT whose
 //!   recording uses another importance than its chains (a known cause of too-dark MLT images) is
 //!   caught.
@@ -20,6 +21,7 @@ mod common;
 
 use common::{ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, metropolis_runs, min_p, settings};
 use light_transport::Budget;
+use light_transport::cmlt::{Cmlt, CmltSettings};
 use light_transport::film::{Film, Image};
 use light_transport::integrators::Bdpt;
 use light_transport::metropolis::{
@@ -27,6 +29,7 @@ use light_transport::metropolis::{
     PrimaryState, Pssmlt, Seeding, SeparateDirect, mutate_primary,
 };
 use light_transport::path::{MisHeuristic, Roulette, WalkSettings};
+use light_transport::pathspace::{MutationProbabilities, Mutations, PathMlt};
 use light_transport::renderer::{Control, Metropolis, Progress, Renderer};
 use light_transport::scene::{Scene, builtin};
 use light_transport::spectrum::Rgb;
@@ -457,6 +460,64 @@ fn pssmlt_and_mmlt_with_direct_lighting_apart_converge_to_bdpt() {
     assert!(
         p < ALPHA,
         "direct light counted twice was not caught (p = {p:.2e})"
+    );
+}
+
+/// Path-space MLT (the default mutations), MEMLT (the manifold-exploration mixture) and charted
+/// MLT with the paths of at most two edges rendered apart by the direct-lighting pass converge to
+/// BDPT on every built-in scene (Welch per 6×6 block, Holm, `ALPHA` per scene and method). Their
+/// chains sample longer paths only (no bootstrap weight on the short lengths, and path-space
+/// proposals of a short path rejected). The test of the test: path-space chains that keep every
+/// path while the pass renders direct lighting too are caught on cornell.
+#[test]
+fn path_space_methods_with_direct_lighting_apart_converge_to_bdpt() {
+    let settings = settings(4000, 32.0, 91);
+    let apart = |m| SeparateDirect::new(m, settings, MisHeuristic::Power, 4, 0.2);
+    let mlt = apart(PathMlt::new(Mutations::new(MAX_EDGES)).unwrap()).expect("a direct pass");
+    assert_eq!(mlt.chains.method.mutations.min_edges, DIRECT_EDGES + 1);
+    let memlt = apart(
+        PathMlt::new(Mutations {
+            probabilities: MutationProbabilities::manifold_exploration(),
+            ..Mutations::new(MAX_EDGES)
+        })
+        .unwrap(),
+    )
+    .expect("a direct pass");
+    for name in builtin::BUILTIN {
+        let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((W, H))).unwrap();
+        let reference = bdpt_batches(&scene);
+        let cmlt = Cmlt::new(
+            &scene,
+            CmltSettings {
+                max_edges: MAX_EDGES,
+                ..CmltSettings::default()
+            },
+        )
+        .unwrap();
+        let cmlt = SeparateDirect::new(cmlt, settings, MisHeuristic::Power, 4, 0.2).unwrap();
+        let p: Vec<f64> = [&mlt as &dyn Renderer, &memlt, &cmlt]
+            .iter()
+            .map(|r| min_p(&renderer_runs(&scene, *r, 8), &reference))
+            .collect();
+        println!(
+            "{name}: with direct lighting apart MLT p = {:.3e}, MEMLT p = {:.3e}, CMLT p = {:.3e}",
+            p[0], p[1], p[2]
+        );
+        for (method, p) in ["MLT", "MEMLT", "CMLT"].iter().zip(p) {
+            assert!(
+                p > ALPHA,
+                "{name}: {method} with direct lighting apart disagrees with BDPT (p = {p:.2e})"
+            );
+        }
+    }
+    let mut twice = mlt;
+    twice.chains.method.mutations.min_edges = 1;
+    let scene = Scene::new(&builtin::builtin("cornell").unwrap(), Some((W, H))).unwrap();
+    let p = min_p(&renderer_runs(&scene, &twice, 8), &bdpt_batches(&scene));
+    println!("cornell: path-space chains with direct light counted twice p = {p:.3e}");
+    assert!(
+        p < ALPHA,
+        "path-space direct light counted twice was not caught (p = {p:.2e})"
     );
 }
 

@@ -92,6 +92,7 @@ fn with_new_path(kind: MutationKind) -> MutationProbabilities {
 fn mutations(probabilities: MutationProbabilities) -> Mutations {
     Mutations {
         max_edges: MAX_EDGES,
+        min_edges: 1,
         importance: ImportanceKind::Luminance,
         probabilities,
         perturbation: Default::default(),
@@ -391,7 +392,7 @@ impl Estimator for ErptWithoutMis {
             let count = (e / self.0.quantum + uniform(stream.rng())).floor() as u64;
             for _ in 0..count {
                 let mut chain = Chain::with_density(state.clone(), 0.0).unwrap();
-                Mutations::run(&proposal, &mut chain, n, stream.rng(), &mut rec);
+                m.run(&proposal, &mut chain, n, stream.rng(), &mut rec);
             }
         }
         Rgb::BLACK

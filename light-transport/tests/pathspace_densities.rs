@@ -309,6 +309,7 @@ fn mutations() -> Mutations {
         rule: mcmc_core::proposals::MixtureRule::PerComponent,
         selection: mcmc_core::proposals::Selection::Fixed,
         max_edges: MAX_EDGES,
+        min_edges: 1,
         importance: IMPORTANCE,
         probabilities: MutationProbabilities::default(),
         perturbation: fx().settings,
@@ -319,7 +320,7 @@ fn mutations() -> Mutations {
 
 /// A non-uniform length distribution, so that `P_len` matters in the new-path ratio.
 fn new_path_lengths() -> NewPath {
-    NewPath::from_energies(&[0.5, 3.0, 2.0, 1.0, 0.25])
+    NewPath::from_energies(&[0.5, 3.0, 2.0, 1.0, 0.25], 1)
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -191,7 +191,7 @@ fn check(rule: UserPathRule, seed: u64) -> (bool, String, f64) {
         exact_draw,
         |s: &mut PathState, rng: &mut ChainRng| {
             let mut c = Chain::unchecked(std::mem::take(s), 0.0);
-            Mutations::run(&proposal, &mut c, 1, rng, &mut ());
+            m.run(&proposal, &mut c, 1, rng, &mut ());
             stats.merge(&c.stats);
             *s = c.state;
         },

@@ -1,4 +1,4 @@
-//! Options of the Metropolis integrators (`--algo pssmlt|mmlt|mlt|cmlt`).
+//! Options of the Metropolis integrators (`--algo pssmlt|mmlt|mlt|memlt|cmlt`).
 
 use super::CliError;
 use clap::{Args, ValueEnum};
@@ -27,7 +27,8 @@ pub enum Importance {
     Max,
 }
 
-/// Metropolis options (used by `--algo pssmlt` and `--algo mmlt`).
+/// Metropolis options (of `--algo pssmlt`, `mmlt`, and the driver's and direct pass's options of
+/// `mlt`, `memlt`, `cmlt`).
 #[derive(Args, Debug, Clone)]
 pub struct MetropolisArgs {
     /// Probability of a large step (independence proposal).
@@ -39,14 +40,15 @@ pub struct MetropolisArgs {
     /// false: expected values alone.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     pub large_step_mis: bool,
-    /// PSSMLT and MMLT: samples per pixel (with --spp) of a pass that renders the paths of at most
-    /// two edges apart from the chains (emitters seen directly or in a mirror, direct
-    /// illumination; Mitsuba 0.6's separateDirect; README). The chains then sample longer paths
-    /// only. 0: no such pass, chains on every path (also when --max-depth leaves no longer paths).
+    /// PSSMLT, MMLT, MLT, MEMLT and CMLT: samples per pixel (with --spp) of a pass that renders
+    /// the paths of at most two edges apart from the chains (emitters seen directly or in a
+    /// mirror, direct illumination; Mitsuba 0.6's separateDirect; README). The chains then sample
+    /// longer paths only. 0: no such pass, chains on every path (also when --max-depth leaves no
+    /// longer paths).
     #[arg(long, default_value_t = 16)]
     pub direct_samples: usize,
-    /// PSSMLT and MMLT: the share of a --time budget the direct-lighting pass runs for (the chains run for
-    /// the rest).
+    /// The share of a --time budget the direct-lighting pass runs for (the chains run for the
+    /// rest).
     #[arg(long, default_value_t = 0.2)]
     pub direct_share: f64,
     /// Small-step kernel.

@@ -162,6 +162,7 @@ impl PathSpaceArgs {
     ) -> Result<Mutations, CliError> {
         let mutations = Mutations {
             max_edges: c.max_edges,
+            min_edges: 1,
             importance: m.importance(),
             probabilities: probabilities.clone(),
             perturbation: self.perturbation(),

@@ -31,11 +31,14 @@
 //!
 //! The recorded colour is the path's balance-heuristic value `f / Σ p` (importance `π_s(u)`), as
 //! for path-space MLT.
+//!
+//! With direct lighting rendered apart ([`crate::metropolis::SeparateDirect`]) the lengths of at
+//! most two edges get no bootstrap weight, hence no chains ([`CmltSettings::min_edges`]).
 
 use super::density_estimation::{DensityEstimation, LightVertices, MergeCounters, MergeSampler};
 use super::light_vertex_map::LightVertexMap;
 use super::technique::{TechniqueChart, unit_integrand};
-use crate::metropolis::{ImportanceKind, Method, Recordable};
+use crate::metropolis::{DIRECT_EDGES, DirectApart, ImportanceKind, Method, Recordable};
 use crate::pathspace::{
     MutationProbabilities, Mutations, NewPath, PathState, PerturbationSettings,
 };
@@ -95,8 +98,11 @@ pub enum SwapKind {
 /// CMLT settings (validated by [`Cmlt::new`]).
 #[derive(Clone, Debug)]
 pub struct CmltSettings {
-    /// Longest path (edges); chains exist for every length `1 ..= max_edges`.
+    /// Longest path (edges); chains exist for every length `min_edges ..= max_edges`.
     pub max_edges: usize,
+    /// Shortest path (edges) the chains sample: 1, or 3 when direct lighting is rendered apart
+    /// ([`crate::metropolis::SeparateDirect`]); shorter lengths get no bootstrap weight.
+    pub min_edges: usize,
     /// Colour to scalar.
     pub importance: ImportanceKind,
     /// Small-step kernel in primary space.
@@ -127,6 +133,7 @@ impl Default for CmltSettings {
     fn default() -> Self {
         Self {
             max_edges: 8,
+            min_edges: 1,
             importance: ImportanceKind::Luminance,
             small_step: SmallStep::default(),
             large_step: 0.3,
@@ -192,6 +199,7 @@ impl Cmlt {
             .map_err(|e| bad("small step", e.to_string()))?;
         let CmltSettings {
             max_edges,
+            min_edges,
             importance,
             large_step,
             swap_every,
@@ -203,6 +211,12 @@ impl Cmlt {
             return Err(bad(
                 "max depth",
                 "CMLT needs paths of at least one edge".into(),
+            ));
+        }
+        if !(1..=max_edges).contains(&min_edges) {
+            return Err(bad(
+                "shortest path",
+                format!("CMLT chains on paths of {min_edges} to {max_edges} edges sample nothing"),
             ));
         }
         for (name, p) in [
@@ -229,6 +243,7 @@ impl Cmlt {
             ));
         }
         settings.mutations.max_edges = max_edges;
+        settings.mutations.min_edges = min_edges;
         settings.mutations.importance = importance;
         if pathspace > 0.0 {
             settings.mutations.validate()?;
@@ -238,6 +253,9 @@ impl Cmlt {
             .map(|k| {
                 let energy: Vec<f64> = (0..=k)
                     .map(|s| {
+                        if k < min_edges {
+                            return 0.0; // no chains of this length
+                        }
                         let Some(chart) = TechniqueChart::new(scene, k, s, importance) else {
                             return 0.0;
                         };
@@ -315,6 +333,9 @@ impl Cmlt {
     /// `1/(k + 1)`).
     fn sample_independent(&self, scene: &Scene, g: usize, seed: u64, state: &mut CmltState) -> f64 {
         let k = g + 1;
+        if k < self.settings.min_edges {
+            return 0.0;
+        }
         let mut rng = stream(seed, 0);
         let s = uniform_index(uniform(&mut rng), k + 1);
         let atlas = self.atlas(scene, k);
@@ -474,6 +495,19 @@ impl Proposal<CmltState> for Unused {
 
     fn kinds(&self) -> Vec<String> {
         vec!["unused".into(); self.0]
+    }
+}
+
+impl DirectApart for Cmlt {
+    /// CMLT without chains on the paths of the direct pass (the technique pilot of their
+    /// lengths, already run by [`Cmlt::new`], is simply not used).
+    fn without_direct(mut self) -> Self {
+        self.settings.min_edges = DIRECT_EDGES + 1;
+        self.settings.mutations.min_edges = DIRECT_EDGES + 1;
+        self
+    }
+    fn max_edges(&self) -> usize {
+        self.settings.max_edges
     }
 }
 

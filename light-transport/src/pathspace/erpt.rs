@@ -258,7 +258,7 @@ impl Estimator for Erpt {
                 let Ok(mut chain) = Chain::with_density(state.clone(), 0.0) else {
                     continue;
                 };
-                Mutations::run(&proposal, &mut chain, n, stream.rng(), &mut rec);
+                m.run(&proposal, &mut chain, n, stream.rng(), &mut rec);
                 stats.merge(&chain.stats);
                 chains += 1;
             }

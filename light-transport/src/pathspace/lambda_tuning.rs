@@ -168,7 +168,7 @@ pub fn tune_lambda_from(
         let (mut proposed, mut accepted) = (0u64, 0u64);
         for (chain, rng) in chains.iter_mut().zip(rngs.iter_mut()) {
             let before = chain.stats.total();
-            Mutations::run(&proposal, chain, STEPS, rng, &mut ());
+            m.run(&proposal, chain, STEPS, rng, &mut ());
             let after = chain.stats.total();
             proposed +=
                 after.proposed - before.proposed - (after.not_applicable - before.not_applicable);

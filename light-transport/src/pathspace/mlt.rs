@@ -6,6 +6,10 @@
 //! `b` normalises the image, and resampling the whole population in proportion to the weights
 //! seeds the chains without start-up bias. Chains then move freely between lengths (bidirectional
 //! and new-path mutations); the new-path mutation picks lengths in proportion to `b_k`.
+//!
+//! With direct lighting rendered apart ([`crate::metropolis::SeparateDirect`]) the chains sample
+//! paths of more than two edges only ([`Mutations::min_edges`]): the shorter lengths get no
+//! bootstrap weight (so no seeds and no new paths), and a mutation proposing one is rejected.
 
 use super::lambda_tuning::{LambdaTuning, tune_lambda_from};
 use super::mutations::Mutations;
@@ -14,7 +18,7 @@ use super::normal_change::{NormalChange, measure_normal_change};
 use super::state::PathState;
 use crate::Result;
 use crate::manifold::WalkStats;
-use crate::metropolis::Method;
+use crate::metropolis::{DIRECT_EDGES, DirectApart, Method};
 use crate::sampler::IndependentStream;
 use crate::scene::Scene;
 use mcmc_core::kernel::Observer;
@@ -87,10 +91,23 @@ impl PathMlt {
     /// bootstrap weight: strategy `s` uniform in `0 … k`, so the weight within its length is
     /// `(k + 1) I(f / Σ_s p_s)`.
     fn sample_independent(&self, scene: &Scene, g: usize, seed: u64, state: &mut PathState) -> f64 {
-        let mut stream = IndependentStream::new(mcmc_core::rng::stream(seed, 0));
         let k = g + 1;
+        if k < self.mutations.min_edges {
+            return 0.0;
+        }
+        let mut stream = IndependentStream::new(mcmc_core::rng::stream(seed, 0));
         NewPath::sample(scene, self.mutations.importance, k, &mut stream, state);
         (k + 1) as f64 * state.contribution.importance
+    }
+}
+
+impl DirectApart for PathMlt {
+    fn without_direct(mut self) -> Self {
+        self.mutations.min_edges = DIRECT_EDGES + 1;
+        self
+    }
+    fn max_edges(&self) -> usize {
+        self.mutations.max_edges
     }
 }
 
@@ -116,11 +133,11 @@ impl Method for PathMlt {
     }
 
     fn ln_density(&self, _scene: &Scene, state: &PathState) -> f64 {
-        super::mutations::ln_target(state)
+        super::mutations::ln_target_from(self.mutations.min_edges, state)
     }
 
     fn bootstrap_done(&self, group_normalisation: &[f64]) {
-        let np = NewPath::from_energies(group_normalisation);
+        let np = NewPath::from_energies(group_normalisation, self.mutations.min_edges);
         match self.new_path.write() {
             Ok(mut g) => *g = np,
             Err(e) => *e.into_inner() = np,
@@ -139,7 +156,7 @@ impl Method for PathMlt {
         let running = self.running();
         if let Ok(proposal) = running.proposal_recording(scene, self.new_path(), Some(&self.walks))
         {
-            Mutations::run(&proposal, chain, n, rng, observer);
+            running.run(&proposal, chain, n, rng, observer);
         }
     }
 
@@ -156,7 +173,7 @@ impl Method for PathMlt {
         if let Ok(proposal) = running.proposal_recording(scene, self.new_path(), Some(&self.walks))
         {
             for (chain, rng) in chains.iter_mut().zip(rngs.iter_mut()) {
-                Mutations::run(&proposal, chain, n, rng, observer);
+                running.run(&proposal, chain, n, rng, observer);
             }
         }
     }

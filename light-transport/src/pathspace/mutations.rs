@@ -62,6 +62,16 @@ pub fn ln_target(s: &PathState) -> f64 {
     }
 }
 
+/// [`ln_target`] restricted to paths of at least `min_edges` edges (0 on shorter ones: chains
+/// that leave those paths to another estimator, e.g. a direct-lighting pass).
+pub fn ln_target_from(min_edges: usize, s: &PathState) -> f64 {
+    if s.path.edges() < min_edges {
+        f64::NEG_INFINITY
+    } else {
+        ln_target(s)
+    }
+}
+
 /// Selection weights of the registered mutations (normalised when used), in [`REGISTRY`] order.
 ///
 /// Defaults: bidirectional 0.25, lens subpath 0.1, lens 0.2, caustic 0.2, multi-chain 0.15, new
@@ -263,6 +273,9 @@ impl PhotonProposals {
 pub struct Mutations {
     /// Longest path (edges).
     pub max_edges: usize,
+    /// Shortest path (edges) the chains sample: 1, or more when the shorter paths are rendered
+    /// apart (`crate::metropolis::SeparateDirect`); proposals of shorter paths are rejected.
+    pub min_edges: usize,
     /// Colour to scalar.
     pub importance: ImportanceKind,
     /// Mutation selection weights.
@@ -285,6 +298,7 @@ impl Mutations {
     pub fn new(max_edges: usize) -> Self {
         Self {
             max_edges,
+            min_edges: 1,
             importance: ImportanceKind::default(),
             probabilities: MutationProbabilities::default(),
             perturbation: PerturbationSettings::default(),
@@ -331,6 +345,15 @@ impl Mutations {
             return Err(Error::InvalidParameter {
                 name: "max depth".into(),
                 reason: "path-space mutations need paths of at least one edge".into(),
+            });
+        }
+        if !(1..=self.max_edges).contains(&self.min_edges) {
+            return Err(Error::InvalidParameter {
+                name: "shortest path".into(),
+                reason: format!(
+                    "path-space chains on paths of {} to {} edges sample nothing",
+                    self.min_edges, self.max_edges
+                ),
             });
         }
         Ok(())
@@ -439,8 +462,10 @@ impl Mutations {
 
     /// `n` Metropolis–Hastings steps of `chain` with `proposal` (from [`Mutations::proposal`]).
     /// Path-space chains carry no absolute density (paths with specular vertices have none): in
-    /// the common measure the target is 1 on paths that carry light, so `chain.ln_density` is 0.
+    /// the common measure the target is 1 on paths of at least [`Mutations::min_edges`] edges that
+    /// carry light, so `chain.ln_density` is 0.
     pub fn run<O: Observer<PathState>>(
+        &self,
         proposal: &Mixture<'_, PathState>,
         chain: &mut Chain<PathState>,
         n: u64,
@@ -448,7 +473,9 @@ impl Mutations {
         observer: &mut O,
     ) {
         chain.ln_density = 0.0;
-        let mut mh = MetropolisHastings::new(ln_target, proposal);
+        let min_edges = self.min_edges;
+        let mut mh =
+            MetropolisHastings::new(|s: &PathState| ln_target_from(min_edges, s), proposal);
         for _ in 0..n {
             mh.step(chain, rng, observer);
         }

@@ -50,23 +50,33 @@ impl NewPath {
         Self { length_probability }
     }
 
-    /// Lengths in proportion to the energy `b_k` of each length, mixed with 20% uniform so that
-    /// every length stays reachable.
-    pub fn from_energies(energies: &[f64]) -> Self {
+    /// Lengths from `min_edges` on in proportion to the energy `b_k` of each length, mixed with
+    /// 20% uniform over those lengths so that every one stays reachable (shorter lengths get
+    /// probability 0: chains that leave them to another estimator).
+    pub fn from_energies(energies: &[f64], min_edges: usize) -> Self {
         let n = energies.len().max(1);
-        let total: f64 = energies.iter().filter(|e| e.is_finite()).sum();
-        if !(total > 0.0) {
-            return Self::uniform(n);
-        }
-        Self {
-            length_probability: energies
-                .iter()
-                .map(|&e| {
-                    let e = if e.is_finite() && e > 0.0 { e } else { 0.0 };
-                    0.8 * e / total + 0.2 / n as f64
-                })
-                .collect(),
-        }
+        let first = min_edges.clamp(1, n) - 1;
+        let allowed = (n - first) as f64;
+        let energy = |i: usize, e: f64| {
+            if i >= first && e.is_finite() && e > 0.0 {
+                e
+            } else {
+                0.0
+            }
+        };
+        let total: f64 = energies
+            .iter()
+            .enumerate()
+            .map(|(i, &e)| energy(i, e))
+            .sum();
+        let length_probability = (0..n)
+            .map(|i| match energies.get(i) {
+                _ if i < first => 0.0,
+                Some(&e) if total > 0.0 => 0.8 * energy(i, e) / total + 0.2 / allowed,
+                _ => 1.0 / allowed,
+            })
+            .collect();
+        Self { length_probability }
     }
 
     /// `P_len(k)`.
@@ -150,5 +160,25 @@ impl Mutation for NewPathMutation<'_> {
             return f64::NEG_INFINITY;
         }
         self.new_path.ln_density(y)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::NewPath;
+
+    /// Lengths below `min_edges` are never drawn, the others keep the 80/20 mix of energy and
+    /// uniform, and the probabilities sum to 1 (also with no energy at all).
+    #[test]
+    fn lengths_from_energies_skip_the_shorter_ones() {
+        let p = NewPath::from_energies(&[5.0, 3.0, 2.0, 0.0, 2.0], 3);
+        let expected = [0.0, 0.0, 0.8 * 0.5 + 0.2 / 3.0, 0.2 / 3.0, 0.8 * 0.5 + 0.2 / 3.0];
+        for (k, e) in (1..=5).zip(expected) {
+            assert!((p.probability(k) - e).abs() < 1e-15, "P_len({k})");
+        }
+        let none = NewPath::from_energies(&[0.0; 4], 2);
+        assert_eq!(none.length_probability, [0.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0]);
+        let all = NewPath::from_energies(&[1.0, 3.0], 1);
+        assert_eq!(all.length_probability, [0.8 * 0.25 + 0.1, 0.8 * 0.75 + 0.1]);
     }
 }

@@ -4,7 +4,6 @@ use crate::cli::CliError;
 use crate::cli::registry::{AlgoArgs, Common, Entry};
 use clap::Args;
 use light_transport::cmlt::{Cmlt, CmltSettings, DensityEstimation, SwapKind};
-use light_transport::renderer::Metropolis;
 use light_transport::scene::Scene;
 use mcmc_charts::moves::IndependenceRule;
 
@@ -15,10 +14,8 @@ pub const ENTRY: Entry = Entry {
     unbiased: false,
     passes: false,
     build: |scene, c, a| {
-        Ok(Box::new(Metropolis {
-            method: a.cmlt.cmlt(scene, c, a)?,
-            settings: a.metropolis.settings(),
-        }))
+        a.metropolis
+            .renderer(a.cmlt.cmlt(scene, c, a)?, c.heuristic, c.max_edges)
     },
 };
 
@@ -84,6 +81,7 @@ impl CmltArgs {
         let m = &a.metropolis;
         let settings = CmltSettings {
             max_edges: c.max_edges,
+            min_edges: 1,
             importance: m.importance(),
             small_step: m.small_step(),
             large_step: m.large_step,

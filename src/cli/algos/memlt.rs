@@ -2,7 +2,6 @@
 
 use crate::cli::registry::Entry;
 use light_transport::pathspace::PathMlt;
-use light_transport::renderer::Metropolis;
 
 /// MEMLT (Jakob & Marschner 2012): path-space MLT with the manifold perturbation in place of the
 /// lens, caustic and multi-chain perturbations.
@@ -14,9 +13,7 @@ pub const ENTRY: Entry = Entry {
     build: |_, c, a| {
         let p = &a.pathspace;
         let mutations = p.mutations(c, &a.metropolis, &p.memlt_mutations)?;
-        Ok(Box::new(Metropolis {
-            method: PathMlt::new(mutations)?,
-            settings: a.metropolis.settings(),
-        }))
+        a.metropolis
+            .renderer(PathMlt::new(mutations)?, c.heuristic, c.max_edges)
     },
 };

@@ -2,7 +2,6 @@
 
 use crate::cli::registry::Entry;
 use light_transport::pathspace::PathMlt;
-use light_transport::renderer::Metropolis;
 
 /// Path-space MLT (Veach & Guibas 1997).
 pub const ENTRY: Entry = Entry {
@@ -14,9 +13,7 @@ pub const ENTRY: Entry = Entry {
         let mutations = a
             .pathspace
             .mutations(c, &a.metropolis, &a.pathspace.mutations)?;
-        Ok(Box::new(Metropolis {
-            method: PathMlt::new(mutations)?,
-            settings: a.metropolis.settings(),
-        }))
+        a.metropolis
+            .renderer(PathMlt::new(mutations)?, c.heuristic, c.max_edges)
     },
 };
