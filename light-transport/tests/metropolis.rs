@@ -521,6 +521,72 @@ fn path_space_methods_with_direct_lighting_apart_converge_to_bdpt() {
     );
 }
 
+/// The direct pass keeps pace with the chains. Under a samples-per-pixel budget its passes run
+/// between the chains' rounds, yet the image does not depend on when they ran: one thread and
+/// two render the same image. A render stopped during the chains holds both estimates: some of
+/// the direct pass's samples per pixel (not all) and some of the chains' mutations.
+#[test]
+fn the_direct_pass_keeps_pace_with_the_chains() {
+    let scene = Scene::new(&builtin::builtin("cornell").unwrap(), Some((W, H))).unwrap();
+    let separate = SeparateDirect::new(
+        mmlt(),
+        settings(2000, 16.0, 5),
+        MisHeuristic::Power,
+        16,
+        0.2,
+    )
+    .expect("a direct pass");
+    let render = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut go_on = |_: &Film, _: &Progress| true;
+            let mut control = Control {
+                progress: &mut go_on,
+                stop: None,
+            };
+            let (film, report) = separate
+                .render(&scene, Budget::SamplesPerPixel(16.0), 5, &mut control)
+                .unwrap();
+            assert_eq!(film.camera_samples(), (16 * W * H) as f64);
+            assert!(!report.interrupted);
+            Image::from_film(&film).pixels
+        })
+    };
+    assert_eq!(render(1), render(2));
+
+    let stop = AtomicBool::new(false);
+    let mut rounds = 0;
+    let mut stop_after_two = |_: &Film, _: &Progress| {
+        rounds += 1;
+        if rounds == 2 {
+            stop.store(true, Ordering::Relaxed);
+        }
+        true
+    };
+    let mut control = Control {
+        progress: &mut stop_after_two,
+        stop: Some(&stop),
+    };
+    let (film, report) = separate
+        .render(&scene, Budget::SamplesPerPixel(16.0), 5, &mut control)
+        .unwrap();
+    let passes = film.camera_samples() / (W * H) as f64;
+    println!(
+        "stopped after two rounds: {passes} direct samples per pixel, {:.2} mutations per pixel",
+        report.samples_per_pixel
+    );
+    assert!(report.interrupted);
+    assert!(report.samples > 0, "the chains ran");
+    assert!(report.samples_per_pixel < 16.0);
+    assert!(
+        (2.0..16.0).contains(&passes),
+        "{passes} direct passes: more than the first, not all"
+    );
+}
+
 /// A direct pass needs longer paths left for the chains.
 #[test]
 fn a_direct_pass_without_longer_paths_is_refused() {

@@ -47,8 +47,8 @@ pub struct MetropolisArgs {
     /// longer paths).
     #[arg(long, default_value_t = 16)]
     pub direct_samples: usize,
-    /// The share of a --time budget the direct-lighting pass runs for (the chains run for the
-    /// rest).
+    /// The share of the wall time (bootstrap included) the direct-lighting pass runs for under
+    /// --time; its passes run between the chains' rounds, so a render stopped early holds both.
     #[arg(long, default_value_t = 0.2)]
     pub direct_share: f64,
     /// Small-step kernel.

@@ -9,16 +9,20 @@
 //! scene lit mostly directly most chains sample the paths that a path tracer handles best (72% of
 //! the chains on the Cornell box sample one or two edges; README). The two estimates cover disjoint
 //! sets of paths, so their sum estimates the image: one film holds the pass's per-pixel estimates
-//! and the chains' splats side by side ([`crate::film::Film::image`] adds them).
+//! and the chains' splats side by side ([`crate::film::Film::image`] adds them). The pass runs
+//! pass by pass between the chains' rounds, keeping pace with them, so that a render stopped early
+//! still holds an estimate of every path.
 
 use super::driver::{Method, MetropolisSettings};
 use crate::budget::Budget;
 use crate::film::{Film, Image};
-use crate::integrators::DirectLighting;
+use crate::integrators::{DirectLighting, Sampling, pass};
 use crate::path::MisHeuristic;
-use crate::renderer::{Control, Metropolis, Passes, Progress, Renderer, Report};
+use crate::renderer::{Control, Metropolis, Progress, Renderer, Report};
+use crate::sampler::PixelSampler;
 use crate::scene::Scene;
 use crate::{Error, Result};
+use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 /// Longest paths the direct pass renders: the emitter seen directly and direct illumination.
@@ -39,9 +43,11 @@ pub struct SeparateDirect<M> {
     pub chains: Metropolis<M>,
     /// The direct pass.
     pub direct: DirectLighting,
-    /// Samples per pixel of the direct pass under a samples-per-pixel budget.
+    /// Samples per pixel of the direct pass under a samples-per-pixel budget (spread over the
+    /// chains' rounds in proportion to their mutations).
     pub samples_per_pixel: usize,
-    /// Share of a time budget the direct pass runs for (the chains run for the rest).
+    /// Share of the wall time the direct pass runs for under a time budget (the bootstrap
+    /// counted; the chains run for the rest).
     pub time_share: f64,
 }
 
@@ -87,10 +93,58 @@ impl<M: DirectApart> SeparateDirect<M> {
     }
 }
 
+/// The direct pass so far: its own film, built pass by pass (pass `i` from the same numbers
+/// whenever it runs, so the film does not depend on when the passes ran).
+struct DirectSoFar {
+    film: Film,
+    passes: u64,
+    samples: u64,
+    rays: u64,
+    time: Duration,
+}
+
+impl DirectSoFar {
+    /// One more whole pass.
+    fn pass(&mut self, scene: &Scene, direct: &DirectLighting, seed: u64) {
+        let t = Instant::now();
+        let sampling = Sampling {
+            seed,
+            sampler: PixelSampler::default(),
+        };
+        self.samples += pass(
+            scene,
+            direct,
+            sampling,
+            self.passes,
+            1.0,
+            &mut self.film,
+            &mut self.rays,
+        );
+        self.passes += 1;
+        self.time += t.elapsed();
+    }
+
+    /// The summary line.
+    fn line(&self) -> String {
+        format!(
+            "direct     paths of ≤ {DIRECT_EDGES} edges apart from the chains: {} samples per pixel in {:.2} s{}",
+            self.passes,
+            self.time.as_secs_f64(),
+            if self.film.discarded > 0 {
+                format!(", {} non-finite discarded", self.film.discarded)
+            } else {
+                String::new()
+            }
+        )
+    }
+}
+
 impl<M: Method> Renderer for SeparateDirect<M> {
-    /// The direct pass first (a fixed number of samples per pixel, or a share of a time budget,
-    /// the chains running for what is left), then the chains; the progress callback sees the
-    /// film with both.
+    /// The direct pass keeps pace with the chains: one pass first, then after every round of the
+    /// chains as many passes as keep it at its share (of the samples per pixel the budget asks
+    /// for, or of the time so far), the rest at the end under a samples-per-pixel budget. So a
+    /// render stopped at any point after the bootstrap holds both estimates, and the progress
+    /// callback sees the film with both.
     fn render(
         &self,
         scene: &Scene,
@@ -100,44 +154,40 @@ impl<M: Method> Renderer for SeparateDirect<M> {
     ) -> Result<(Film, Report)> {
         budget.validate()?;
         let start = Instant::now();
-        let mut silent = |_: &Film, _: &Progress| true;
-        let mut direct_control = Control {
-            progress: &mut silent,
-            stop: control.stop,
+        let stop = control.stop;
+        let stopped = || stop.is_some_and(|s| s.load(Ordering::Relaxed));
+        let planned = self.samples_per_pixel as u64;
+        let (width, height) = (scene.camera.width, scene.camera.height);
+        let mut direct = DirectSoFar {
+            film: Film::new(width, height),
+            passes: 0,
+            samples: 0,
+            rays: 0,
+            time: Duration::ZERO,
         };
-        let (direct, direct_report) = Passes::new(self.direct).render(
-            scene,
-            match budget {
-                Budget::SamplesPerPixel(_) => {
-                    Budget::SamplesPerPixel(self.samples_per_pixel as f64)
-                }
-                Budget::Time(t) => Budget::Time(t.mul_f64(self.time_share)),
-            },
-            seed,
-            &mut direct_control,
-        )?;
-        let direct_line = format!(
-            "direct     paths of ≤ {DIRECT_EDGES} edges apart from the chains: {:.1} samples per pixel in {:.2} s{}",
-            direct_report.samples_per_pixel,
-            direct_report.elapsed.as_secs_f64(),
-            if direct.discarded > 0 {
-                format!(", {} non-finite discarded", direct.discarded)
-            } else {
-                String::new()
-            }
-        );
-        if direct_report.interrupted {
-            // Stopped during the direct pass: its work is all there is.
+        direct.pass(scene, &self.direct, seed);
+        if stopped() {
+            // Stopped during the first pass: its work is all there is (no estimate of the
+            // longer paths, so no samples to weigh it by in a merge).
             let report = Report {
                 interrupted: true,
                 elapsed: start.elapsed(),
-                details: vec![direct_line, "chains     not run (interrupted)".into()],
-                discarded: direct.discarded,
-                rays: direct_report.rays,
+                details: vec![direct.line(), "chains     not run (interrupted)".into()],
+                discarded: direct.film.discarded,
+                rays: direct.rays,
                 ..Report::default()
             };
-            return Ok((direct, report));
+            return Ok((direct.film, report));
         }
+        // Passes owed once the chains have made `spp` mutations per pixel.
+        let owed = |direct: &DirectSoFar, spp: f64| match budget {
+            Budget::SamplesPerPixel(m) => {
+                direct.passes < planned.min((planned as f64 * spp / m).ceil() as u64)
+            }
+            Budget::Time(_) => {
+                direct.time.as_secs_f64() < self.time_share * start.elapsed().as_secs_f64()
+            }
+        };
         let chain_budget = match budget {
             Budget::SamplesPerPixel(m) => Budget::SamplesPerPixel(m),
             Budget::Time(t) => Budget::Time(
@@ -145,54 +195,72 @@ impl<M: Method> Renderer for SeparateDirect<M> {
                     .max(Duration::from_millis(1)),
             ),
         };
-        let mut progress = |film: &Film, p: &Progress| {
-            let mut both = direct.clone();
-            both.merge(film);
-            let p = Progress {
-                elapsed: start.elapsed(),
-                ..*p
+        let result = {
+            let direct = &mut direct;
+            let mut progress = |film: &Film, p: &Progress| {
+                while owed(direct, p.samples_per_pixel) && !stopped() {
+                    direct.pass(scene, &self.direct, seed);
+                }
+                let mut both = direct.film.clone();
+                both.merge(film);
+                let p = Progress {
+                    elapsed: start.elapsed(),
+                    ..*p
+                };
+                (control.progress)(&both, &p)
             };
-            (control.progress)(&both, &p)
+            let mut chain_control = Control {
+                progress: &mut progress,
+                stop,
+            };
+            self.chains
+                .render(scene, chain_budget, seed, &mut chain_control)
         };
-        let mut chain_control = Control {
-            progress: &mut progress,
-            stop: control.stop,
-        };
-        let (chains, mut report) = match self.chains.render(
-            scene,
-            chain_budget,
-            seed,
-            &mut chain_control,
-        ) {
+        let (chains, mut report) = match result {
             // No longer path carried light in the bootstrap: its estimate of them is 0, and
-            // the image is the direct pass's (unless that is black too).
+            // the image is the direct pass's (unless that is black too), which takes the whole
+            // budget.
             Err(Error::NoLight { paths })
-                if Image::from_film(&direct).mean().max_component() > 0.0 =>
+                if Image::from_film(&direct.film).mean().max_component() > 0.0 =>
             {
+                let done = |d: &DirectSoFar| match budget {
+                    Budget::SamplesPerPixel(_) => d.passes >= planned,
+                    Budget::Time(t) => start.elapsed() >= t,
+                };
+                while !done(&direct) && !stopped() {
+                    direct.pass(scene, &self.direct, seed);
+                }
                 let report = Report {
-                    samples_per_pixel: direct_report.samples_per_pixel,
-                    samples: direct_report.samples,
+                    samples_per_pixel: direct.passes as f64,
+                    samples: direct.samples,
                     elapsed: start.elapsed(),
                     details: vec![
-                        direct_line,
+                        direct.line(),
                         format!(
                             "chains     none: no path longer than {DIRECT_EDGES} edges carried light in {paths} bootstrap paths"
                         ),
                     ],
-                    discarded: direct.discarded,
-                    rays: direct_report.rays,
+                    discarded: direct.film.discarded,
+                    rays: direct.rays,
+                    interrupted: stopped(),
                     ..Report::default()
                 };
-                return Ok((direct, report));
+                return Ok((direct.film, report));
             }
             other => other?,
         };
-        let mut film = direct.clone();
+        if let Budget::SamplesPerPixel(_) = budget {
+            while direct.passes < planned && !stopped() {
+                direct.pass(scene, &self.direct, seed);
+            }
+        }
+        report.interrupted |= stopped();
+        report.details.insert(0, direct.line());
+        let mut film = direct.film;
         film.merge(&chains);
-        report.details.insert(0, direct_line);
-        report.rays += direct_report.rays;
+        report.rays += direct.rays;
         report.discarded = film.discarded;
-        report.elapsed += direct_report.elapsed;
+        report.elapsed = start.elapsed();
         Ok((film, report))
     }
 }

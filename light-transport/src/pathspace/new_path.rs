@@ -172,12 +172,21 @@ mod tests {
     #[test]
     fn lengths_from_energies_skip_the_shorter_ones() {
         let p = NewPath::from_energies(&[5.0, 3.0, 2.0, 0.0, 2.0], 3);
-        let expected = [0.0, 0.0, 0.8 * 0.5 + 0.2 / 3.0, 0.2 / 3.0, 0.8 * 0.5 + 0.2 / 3.0];
+        let expected = [
+            0.0,
+            0.0,
+            0.8 * 0.5 + 0.2 / 3.0,
+            0.2 / 3.0,
+            0.8 * 0.5 + 0.2 / 3.0,
+        ];
         for (k, e) in (1..=5).zip(expected) {
             assert!((p.probability(k) - e).abs() < 1e-15, "P_len({k})");
         }
         let none = NewPath::from_energies(&[0.0; 4], 2);
-        assert_eq!(none.length_probability, [0.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0]);
+        assert_eq!(
+            none.length_probability,
+            [0.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0]
+        );
         let all = NewPath::from_energies(&[1.0, 3.0], 1);
         assert_eq!(all.length_probability, [0.8 * 0.25 + 0.1, 0.8 * 0.75 + 0.1]);
     }
