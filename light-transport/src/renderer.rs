@@ -151,6 +151,16 @@ pub struct Metropolis<M> {
     pub settings: MetropolisSettings,
 }
 
+impl<M: Method> Metropolis<M> {
+    /// The summary lines of a render with driver statistics `stats` on `pixels` pixels: the
+    /// driver's, then the method's.
+    pub fn details(&self, stats: &MetropolisStats, pixels: f64) -> Vec<String> {
+        let mut details = stats.summary(pixels);
+        details.extend(self.method.details());
+        details
+    }
+}
+
 impl<M: Method> Renderer for Metropolis<M> {
     fn render(
         &self,
@@ -183,8 +193,7 @@ impl<M: Method> Renderer for Metropolis<M> {
                 (control.progress)(film, &progress)
             },
         )?;
-        let mut details = stats.summary(pixels);
-        details.extend(self.method.details());
+        let details = self.details(&stats, pixels);
         let report = Report {
             samples_per_pixel: stats.mutations as f64 / pixels,
             samples: stats.mutations,

@@ -195,6 +195,7 @@ impl<M: Method> Renderer for SeparateDirect<M> {
                     .max(Duration::from_millis(1)),
             ),
         };
+        let before_chains = direct.time;
         let result = {
             let direct = &mut direct;
             let mut progress = |film: &Film, p: &Progress| {
@@ -249,6 +250,13 @@ impl<M: Method> Renderer for SeparateDirect<M> {
             }
             other => other?,
         };
+        // The chains' time and rates without the passes run between their rounds.
+        if let Some(stats) = report.metropolis.as_mut() {
+            stats.chain_time = stats
+                .chain_time
+                .saturating_sub(direct.time.saturating_sub(before_chains));
+            report.details = self.chains.details(stats, (width * height) as f64);
+        }
         if let Budget::SamplesPerPixel(_) = budget {
             while direct.passes < planned && !stopped() {
                 direct.pass(scene, &self.direct, seed);
