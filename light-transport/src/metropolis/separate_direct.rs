@@ -179,7 +179,9 @@ impl<M: Method> Renderer for SeparateDirect<M> {
             };
             return Ok((direct.film, report));
         }
-        // Passes owed once the chains have made `spp` mutations per pixel.
+        // Whether a pass is owed once the chains have made `spp` mutations per pixel: under a
+        // samples-per-pixel budget the same share of the planned passes, under a time budget
+        // passes until the pass has had its share of the time so far.
         let owed = |direct: &DirectSoFar, spp: f64| match budget {
             Budget::SamplesPerPixel(m) => {
                 direct.passes < planned.min((planned as f64 * spp / m).ceil() as u64)
