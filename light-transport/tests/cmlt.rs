@@ -23,7 +23,7 @@ mod common;
 
 use common::{
     ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, blocks_and_stats, metropolis_runs, min_p,
-    settings,
+    settings, with_threads,
 };
 use light_transport::cmlt::{
     Cmlt, CmltSettings, CmltState, DensityEstimation, SwapKind, TechniqueChart,
@@ -556,11 +556,7 @@ fn replica_exchange_images_do_not_depend_on_the_thread_count() {
     let mut m = cmlt_with(&scene, SwapKind::ReplicaExchange, 0.0, 0.0);
     m.settings.swap_every = 2.0;
     let render = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        with_threads(threads, || {
             let (film, stats) =
                 light_transport::metropolis::run(&scene, &m, &settings(2000, 8.0, 3), |_, _, _| {
                     true

@@ -19,7 +19,9 @@
 
 mod common;
 
-use common::{ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, metropolis_runs, min_p, settings};
+use common::{
+    ALPHA, H, MAX_EDGES, W, bdpt_batches, blocks, metropolis_runs, min_p, settings, with_threads,
+};
 use light_transport::Budget;
 use light_transport::cmlt::{Cmlt, CmltSettings};
 use light_transport::film::{Film, Image};
@@ -410,6 +412,14 @@ fn renderer_runs(scene: &Scene, renderer: &dyn Renderer, runs: u64) -> Vec<Vec<f
         .collect()
 }
 
+/// A broken `renderer` (`what`) disagrees with BDPT on cornell (8 runs as in [`renderer_runs`]).
+fn assert_caught_on_cornell(renderer: &dyn Renderer, what: &str) {
+    let scene = Scene::new(&builtin::builtin("cornell").unwrap(), Some((W, H))).unwrap();
+    let p = min_p(&renderer_runs(&scene, renderer, 8), &bdpt_batches(&scene));
+    println!("cornell: {what} p = {p:.3e}");
+    assert!(p < ALPHA, "{what} was not caught (p = {p:.2e})");
+}
+
 /// PSSMLT and MMLT with the paths of at most two edges rendered apart by the direct-lighting
 /// pass converge to BDPT on every built-in scene
 /// (Welch per 6×6 block, Holm, `ALPHA` per scene and method). The test of the test: MMLT chains
@@ -454,13 +464,7 @@ fn pssmlt_and_mmlt_with_direct_lighting_apart_converge_to_bdpt() {
         },
         ..separate
     };
-    let scene = Scene::new(&builtin::builtin("cornell").unwrap(), Some((W, H))).unwrap();
-    let p = min_p(&renderer_runs(&scene, &twice, 8), &bdpt_batches(&scene));
-    println!("cornell: direct light counted twice p = {p:.3e}");
-    assert!(
-        p < ALPHA,
-        "direct light counted twice was not caught (p = {p:.2e})"
-    );
+    assert_caught_on_cornell(&twice, "MMLT chains with direct light counted twice");
 }
 
 /// Path-space MLT (the default mutations), MEMLT (the manifold-exploration mixture) and charted
@@ -512,13 +516,7 @@ fn path_space_methods_with_direct_lighting_apart_converge_to_bdpt() {
     }
     let mut twice = mlt;
     twice.chains.method.mutations.min_edges = 1;
-    let scene = Scene::new(&builtin::builtin("cornell").unwrap(), Some((W, H))).unwrap();
-    let p = min_p(&renderer_runs(&scene, &twice, 8), &bdpt_batches(&scene));
-    println!("cornell: path-space chains with direct light counted twice p = {p:.3e}");
-    assert!(
-        p < ALPHA,
-        "path-space direct light counted twice was not caught (p = {p:.2e})"
-    );
+    assert_caught_on_cornell(&twice, "path-space chains with direct light counted twice");
 }
 
 /// The direct pass keeps pace with the chains. Under a samples-per-pixel budget its passes run
@@ -537,11 +535,7 @@ fn the_direct_pass_keeps_pace_with_the_chains() {
     )
     .expect("a direct pass");
     let render = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        with_threads(threads, || {
             let mut go_on = |_: &Film, _: &Progress| true;
             let mut control = Control {
                 progress: &mut go_on,

@@ -259,3 +259,12 @@ pub fn vmf_pdf(
     let k = (lo * hi).sqrt();
     k * (k * (mean.dot(w) - 1.0)).exp() / (TAU * (1.0 - (-2.0 * k).exp()))
 }
+
+/// `f` run on a pool of `threads` threads (for tests that images do not depend on the count).
+pub fn with_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool")
+        .install(f)
+}
