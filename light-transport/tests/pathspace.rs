@@ -170,6 +170,7 @@ fn inapplicable_mutations_are_counted() {
             budget: Budget::SamplesPerPixel(8.0),
             seed: 3,
             seeding: Seeding::Resample,
+            refine_normalisation: true,
         };
         let (_, stats) = metropolis::run(&scene, &mlt, &settings, |_, _, _| true).unwrap();
         let k = &stats.stats.kinds[kind.index()];
@@ -382,6 +383,7 @@ impl Estimator for ErptWithoutMis {
             recorder: splats,
             b: self.0.quantum / n as f64,
             large_steps: None,
+            tally: None,
         };
         for (state, _) in seeds {
             // Which strategy sampled it is lost in `seed_paths`: take the larger C*, which is

@@ -69,6 +69,11 @@ pub struct MetropolisArgs {
     /// Bootstrap samples (per path length for mmlt).
     #[arg(long, default_value_t = 100_000)]
     pub bootstrap: usize,
+    /// PSSMLT and MMLT: refine the bootstrap's normalisation with the large steps' candidates as
+    /// the chains run, so the image's overall scale converges with the render instead of staying
+    /// at the bootstrap's error (README). false: the bootstrap's alone.
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub refine_normalisation: bool,
     /// Scalar importance of colours.
     #[arg(long, value_enum, default_value_t = Importance::Luminance)]
     pub importance: Importance,
@@ -128,6 +133,7 @@ impl MetropolisArgs {
         MetropolisSettings {
             chains: self.chains,
             bootstrap: self.bootstrap,
+            refine_normalisation: self.refine_normalisation,
             ..MetropolisSettings::default()
         }
     }

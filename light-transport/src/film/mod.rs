@@ -35,6 +35,17 @@ pub struct Film {
     pub splat_scale: f64,
     /// Samples rejected because they were NaN or infinite.
     pub discarded: u64,
+    /// Splat layers whose scale is settled later, each counted as `scale · sum` (empty unless
+    /// splatted into).
+    layers: Vec<Layer>,
+}
+
+/// Splats whose common factor is known only as the render goes on (a Metropolis chain's
+/// normalisation, refined by its large steps: [`crate::metropolis`]).
+#[derive(Clone, Debug, PartialEq)]
+struct Layer {
+    scale: f64,
+    sum: Vec<Rgb>,
 }
 
 impl Film {
@@ -48,7 +59,45 @@ impl Film {
             splat_sum: vec![Rgb::BLACK; width * height],
             splat_scale: 0.0,
             discarded: 0,
+            layers: Vec::new(),
         }
+    }
+
+    /// Splat layer `layer`, its pixels allocated if `pixels` (layers up to it made as needed).
+    fn layer(&mut self, layer: usize, pixels: bool) -> &mut Layer {
+        if self.layers.len() <= layer {
+            let empty = Layer {
+                scale: 1.0,
+                sum: Vec::new(),
+            };
+            self.layers.resize(layer + 1, empty);
+        }
+        let n = self.width * self.height;
+        let l = &mut self.layers[layer];
+        if pixels && l.sum.is_empty() {
+            l.sum = vec![Rgb::BLACK; n];
+        }
+        l
+    }
+
+    /// Splat a value at raster position `r` into splat layer `layer`, which counts as the splat
+    /// buffer does but multiplied by the layer's scale ([`Film::set_layer_scale`]; 1 until set).
+    /// A layer's pixels are allocated by its first splat.
+    #[inline]
+    pub fn add_layer_splat(&mut self, layer: usize, r: [f64; 2], v: Rgb) {
+        if !v.is_finite() {
+            self.discarded += 1;
+            return;
+        }
+        if let Some(i) = self.pixel_of(r) {
+            self.layer(layer, true).sum[i] += v;
+        }
+    }
+
+    /// Set the factor splat layer `layer` is counted with (a finite value ≥ 0).
+    pub fn set_layer_scale(&mut self, layer: usize, scale: f64) {
+        debug_assert!(scale.is_finite() && scale >= 0.0, "layer scale {scale}");
+        self.layer(layer, false).scale = scale;
     }
 
     /// The pixel containing raster position `r`.
@@ -81,13 +130,34 @@ impl Film {
         }
     }
 
-    /// Add another film's accumulation (same size). Merging in a fixed order keeps results
-    /// independent of the thread count.
+    /// Add another film's accumulation (same size). A splat layer this film lacks comes with its
+    /// scale; one it has with another scale enters the splat buffer as it counts now. Merging
+    /// in a fixed order keeps results independent of the thread count.
     pub fn merge(&mut self, o: &Film) {
         for i in 0..self.pixel_sum.len() {
             self.pixel_sum[i] += o.pixel_sum[i];
             self.pixel_count[i] += o.pixel_count[i];
             self.splat_sum[i] += o.splat_sum[i];
+        }
+        for (k, l) in o
+            .layers
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| !l.sum.is_empty())
+        {
+            let mine = self.layer(k, false);
+            if mine.sum.is_empty() {
+                *mine = l.clone();
+            } else if mine.scale == l.scale {
+                for (a, b) in mine.sum.iter_mut().zip(&l.sum) {
+                    *a += *b;
+                }
+            } else {
+                // Other scales: the other layer enters as it counts now.
+                for (a, b) in self.splat_sum.iter_mut().zip(&l.sum) {
+                    *a += *b * l.scale;
+                }
+            }
         }
         self.splat_scale += o.splat_scale;
         self.discarded += o.discarded;
@@ -103,7 +173,11 @@ impl Film {
                     Rgb::BLACK
                 };
                 if self.splat_scale > 0.0 {
-                    v += self.splat_sum[i] / self.splat_scale;
+                    let mut splats = self.splat_sum[i];
+                    for l in self.layers.iter().filter(|l| !l.sum.is_empty()) {
+                        splats += l.sum[i] * l.scale;
+                    }
+                    v += splats / self.splat_scale;
                 }
                 v
             })
@@ -183,6 +257,34 @@ mod tests {
         assert_eq!(img[1], Rgb::splat(2.0));
         assert_eq!(f.discarded, 2);
         assert!(img.iter().all(|p| p.is_finite()));
+    }
+
+    /// A splat layer counts times its scale, set before or after its splats; a merge carries a
+    /// layer the film lacks with its scale and one it has with another scale as it counts now.
+    #[test]
+    fn splat_layers_count_times_their_scale() {
+        let mut a = Film::new(2, 1);
+        a.splat_scale = 2.0;
+        a.add_splat([0.5, 0.5], Rgb::splat(2.0));
+        a.add_layer_splat(1, [0.5, 0.5], Rgb::splat(4.0));
+        a.add_layer_splat(1, [1.5, 0.5], Rgb::splat(f64::NAN));
+        assert_eq!(a.image(), [Rgb::splat(3.0), Rgb::BLACK]);
+        a.set_layer_scale(1, 0.5);
+        assert_eq!(a.image(), [Rgb::splat(2.0), Rgb::BLACK]);
+        assert_eq!(a.discarded, 1);
+        let mut b = Film::new(2, 1);
+        b.merge(&a);
+        b.splat_scale = 2.0;
+        assert_eq!(b.image(), a.image());
+        let mut c = Film::new(2, 1);
+        c.add_layer_splat(1, [1.5, 0.5], Rgb::splat(8.0));
+        c.set_layer_scale(1, 0.25);
+        b.merge(&c);
+        b.splat_scale = 2.0;
+        assert_eq!(b.image(), [Rgb::splat(2.0), Rgb::splat(1.0)]);
+        b.set_layer_scale(1, 1.0);
+        // a's layer rescales, c's entered as it counted at the merge.
+        assert_eq!(b.image(), [Rgb::splat(3.0), Rgb::splat(1.0)]);
     }
 
     #[test]

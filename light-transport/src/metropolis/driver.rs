@@ -5,7 +5,7 @@
 //! master seed; chains are processed in fixed groups whose splats are applied to the film in group
 //! order after every round, so the image is identical for any thread count.
 
-use super::record::{ExpectedValue, LargeStepMis, Recordable, Sink};
+use super::record::{ExpectedValue, LargeStepMis, NormalisationTally, Recordable, Sink};
 use crate::budget::Budget;
 use crate::film::Film;
 use crate::scene::Scene;
@@ -86,6 +86,14 @@ pub trait Method: Sync {
     fn large_steps(&self) -> Option<(usize, f64)> {
         None
     }
+    /// The move kind whose candidates are independent samples of unit density over their
+    /// group's space, drawn as a bootstrap sample is (Kelemen's large step), whether or not they
+    /// are also counted by [`Method::large_steps`]: the driver sums their importance to refine
+    /// each group's normalisation ([`MetropolisSettings::refine_normalisation`]). By default the
+    /// kind of [`Method::large_steps`].
+    fn independent_proposals(&self) -> Option<usize> {
+        self.large_steps().map(|(kind, _)| kind)
+    }
     /// Told the per-group normalisations `b_g` once the bootstrap is done, before any chain runs
     /// (e.g. to choose path lengths in proportion to their energy).
     fn bootstrap_done(&self, _group_normalisation: &[f64]) {}
@@ -134,6 +142,10 @@ pub struct MetropolisSettings {
     pub seed: u64,
     /// Seeding rule.
     pub seeding: Seeding,
+    /// Refine each group's normalisation `b_g` with the independent samples the chains draw
+    /// ([`Method::independent_proposals`]) as they run, so the image's scale is no longer fixed by
+    /// the bootstrap alone: its error then falls with the render's length.
+    pub refine_normalisation: bool,
 }
 
 impl Default for MetropolisSettings {
@@ -144,6 +156,7 @@ impl Default for MetropolisSettings {
             budget: Budget::SamplesPerPixel(16.0),
             seed: 1,
             seeding: Seeding::Resample,
+            refine_normalisation: true,
         }
     }
 }
@@ -155,6 +168,12 @@ pub struct MetropolisStats {
     pub normalisation: f64,
     /// Per group.
     pub group_normalisation: Vec<f64>,
+    /// Per group, refined by the chains' independent samples
+    /// ([`MetropolisSettings::refine_normalisation`]; empty when not refined): the normalisation
+    /// the image was made with.
+    pub refined_normalisation: Vec<f64>,
+    /// The chains' independent samples that refined it.
+    pub independent_samples: u64,
     /// Chains per group.
     pub group_chains: Vec<usize>,
     /// Bootstrap samples with positive importance.
@@ -196,6 +215,14 @@ impl MetropolisStats {
             },
             self.seed_time.as_secs_f64()
         )];
+        if !self.refined_normalisation.is_empty() {
+            let refined: f64 = self.refined_normalisation.iter().sum();
+            out.push(format!(
+                "refined    b = {refined:.5e} ({:+.2}%) with the chains' {} independent samples",
+                100.0 * (refined / self.normalisation - 1.0),
+                self.independent_samples
+            ));
+        }
         if self.group_chains.len() > 1 {
             let groups: Vec<String> = self
                 .group_chains
@@ -242,6 +269,18 @@ fn key(seed: u64, g: usize, i: usize) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
+}
+
+/// The normalisation of every group from the bootstrap and the chains' independent samples of
+/// `tally` (which holds both).
+fn refine(stats: &mut MetropolisStats, tally: &NormalisationTally, bootstrap: u64) {
+    stats.refined_normalisation = tally
+        .sum
+        .iter()
+        .zip(&tally.count)
+        .map(|(s, &n)| if n > 0 { s / n as f64 } else { 0.0 })
+        .collect();
+    stats.independent_samples = tally.count.iter().map(|n| n - bootstrap).sum();
 }
 
 /// Run `method` on `scene` into a film. `progress(film, mutations done, elapsed)` is called
@@ -368,14 +407,28 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let split = SPLIT.min(chains.len());
     let size = chains.len().div_ceil(split);
     let b = stats.normalisation;
+    // The bootstrap's normalisation per group, fixed for the weights of the whole run.
+    let group_b = stats.group_normalisation.clone();
     let large_steps = method
         .large_steps()
         .filter(|&(_, p)| p > 0.0)
         .map(|(kind, probability)| LargeStepMis {
             kind,
             probability,
-            group_normalisation: &stats.group_normalisation,
+            group_normalisation: &group_b,
         });
+    // Bootstrap sums and counts, to which the chains' independent samples are added.
+    let tally_kind = method
+        .independent_proposals()
+        .filter(|_| settings.refine_normalisation);
+    let mut tally = tally_kind.map(|kind| {
+        let mut t = NormalisationTally::new(kind, groups);
+        for (g, b) in stats.group_normalisation.iter().enumerate() {
+            t.sum[g] = b * settings.bootstrap as f64;
+            t.count[g] = settings.bootstrap as u64;
+        }
+        t
+    });
     let exchange_every = method.exchange_every();
     let mut exchange_rng = substream(settings.seed, EXCHANGE, 0);
     let mut round = 0;
@@ -389,9 +442,13 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
             None => per_round,
         };
         let round_start = Instant::now();
-        let mut outputs: Vec<(K::Chunk, u64)> = (0..chains.len().div_ceil(size))
-            .map(|_| (sink.chunk(), 0))
-            .collect();
+        let mut outputs: Vec<(K::Chunk, u64, Option<NormalisationTally>)> =
+            (0..chains.len().div_ceil(size))
+                .map(|_| {
+                    let t = tally_kind.map(|kind| NormalisationTally::new(kind, groups));
+                    (sink.chunk(), 0, t)
+                })
+                .collect();
         let slice = k.div_ceil(SLICES).max(1);
         let mut left = k;
         let mut since_exchange = 0;
@@ -404,12 +461,13 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
                 .par_chunks_mut(size)
                 .zip(rngs.par_chunks_mut(size))
                 .zip(outputs.par_iter_mut())
-                .for_each(|((cs, rs), (chunk, rays))| {
+                .for_each(|((cs, rs), (chunk, rays, tally))| {
                     crate::accel::take_ray_count();
                     let mut rec = ExpectedValue {
                         recorder: chunk,
                         b,
                         large_steps,
+                        tally: tally.as_mut(),
                     };
                     method.mutate_chunk(scene, cs, rs, step, &mut rec);
                     *rays += crate::accel::take_ray_count();
@@ -427,9 +485,26 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
                 break;
             }
         }
-        for (chunk, rays) in outputs {
+        for (chunk, rays, round_tally) in outputs {
             sink.absorb(chunk);
             stats.rays += rays;
+            if let (Some(t), Some(r)) = (tally.as_mut(), round_tally) {
+                t.merge(&r);
+            }
+        }
+        if let Some(t) = &tally {
+            refine(&mut stats, t, settings.bootstrap as u64);
+            let scales: Vec<f64> = (0..groups)
+                .map(|g| {
+                    let c = group_b[g];
+                    if c > 0.0 {
+                        stats.refined_normalisation[g] / c
+                    } else {
+                        1.0
+                    }
+                })
+                .collect();
+            sink.chain_scales(&scales);
         }
         sink.mutations_done(stats.mutations, pixels);
         let elapsed = t.elapsed();

@@ -260,4 +260,9 @@ impl Method for Pssmlt {
         self.large_step_mis
             .then_some((LARGE_STEP, self.kelemen.large_step_probability))
     }
+
+    fn independent_proposals(&self) -> Option<usize> {
+        // A large step draws a fresh primary sample, as the bootstrap does.
+        (self.kelemen.large_step_probability > 0.0).then_some(LARGE_STEP)
+    }
 }

@@ -36,6 +36,13 @@ pub trait Recordable {
 pub trait Recorder<S>: Send {
     /// Deposit `weight` times what `state` contributes (`weight` already includes `b / I`).
     fn record(&mut self, state: &S, weight: f64);
+    /// Deposit `weight` times what `state` contributes to the estimate of its group's chains,
+    /// whose scale the driver refines as the render goes on ([`Sink::chain_scales`]: the
+    /// deposit counts times its group's scale). A recorder that keeps no groups apart records
+    /// it as [`Recorder::record`] (its sink then keeps the bootstrap's normalisation).
+    fn record_chain(&mut self, state: &S, weight: f64) {
+        self.record(state, weight);
+    }
 }
 
 /// Splats go to a list (the film's recorder).
@@ -58,6 +65,50 @@ pub struct ExpectedValue<'a, R> {
     pub b: f64,
     /// Large steps combined with the chain by the balance heuristic, if any.
     pub large_steps: Option<LargeStepMis<'a>>,
+    /// Where the importance of independent candidates is summed to refine the normalisation,
+    /// if anywhere: the chains' deposits then go to [`Recorder::record_chain`].
+    pub tally: Option<&'a mut NormalisationTally>,
+}
+
+/// Independent samples the chains draw as they run, summed per group to refine the bootstrap's
+/// normalisation `b_g` (Kelemen et al. 2002 §4 estimate `b` from the large steps: a large step's
+/// candidate is a sample of unit density over its group's primary space, so the mean of its
+/// importance is an unbiased estimate of `b_g`, as a bootstrap sample's is).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NormalisationTally {
+    /// The move kind whose candidates are independent samples.
+    pub kind: usize,
+    /// Sum of their importance per group (non-finite or negative importance counts as 0, as in
+    /// the bootstrap).
+    pub sum: Vec<f64>,
+    /// Their number per group.
+    pub count: Vec<u64>,
+}
+
+impl NormalisationTally {
+    /// An empty tally of the candidates of move kind `kind` over `groups` groups.
+    pub fn new(kind: usize, groups: usize) -> Self {
+        Self {
+            kind,
+            sum: vec![0.0; groups],
+            count: vec![0; groups],
+        }
+    }
+
+    /// Count a candidate of group `g` with importance `i`.
+    #[inline]
+    fn add(&mut self, g: usize, i: f64) {
+        self.sum[g] += if i.is_finite() && i > 0.0 { i } else { 0.0 };
+        self.count[g] += 1;
+    }
+
+    /// Add another tally's counts (in a fixed order, for results independent of the threads).
+    pub fn merge(&mut self, o: &Self) {
+        for g in 0..self.sum.len() {
+            self.sum[g] += o.sum[g];
+            self.count[g] += o.count[g];
+        }
+    }
 }
 
 /// Kelemen et al. (2002) §4: a chain whose move kind `kind` is, with probability `probability`, an
@@ -90,22 +141,38 @@ impl LargeStepMis<'_> {
 }
 
 impl<R> ExpectedValue<'_, R> {
-    /// Deposit `w` times the state's contribution, scaled by `b / I` (or, with large steps
-    /// combined, by `b / (I + p b_g)`).
+    /// `b / I` (or, with large steps combined, `b / (I + p b_g)`) for a state of importance
+    /// `i`, or `None` if the state deposits nothing.
     #[inline]
-    pub fn record<S: Recordable>(&mut self, s: &S, w: f64)
-    where
-        R: Recorder<S>,
-    {
+    fn scale<S: Recordable>(&self, s: &S) -> Option<f64> {
         let i = s.contribution().importance;
-        if w <= 0.0 || !(i > 0.0) || !i.is_finite() {
-            return;
+        if !(i > 0.0) || !i.is_finite() {
+            return None;
         }
         // A state's group is one of the driver's (a method's invariant, not input).
         let independent = self
             .large_steps
             .map_or(0.0, |l| l.probability * l.group_normalisation[s.group()]);
-        self.recorder.record(s, w * self.b / (i + independent));
+        Some(self.b / (i + independent))
+    }
+
+    /// Deposit `w` times the state's contribution to the chain's estimate, scaled by
+    /// [`ExpectedValue::scale`].
+    #[inline]
+    pub fn record<S: Recordable>(&mut self, s: &S, w: f64)
+    where
+        R: Recorder<S>,
+    {
+        if w <= 0.0 {
+            return;
+        }
+        if let Some(k) = self.scale(s) {
+            if self.tally.is_some() {
+                self.recorder.record_chain(s, w * k);
+            } else {
+                self.recorder.record(s, w * k);
+            }
+        }
     }
 }
 
@@ -114,10 +181,25 @@ impl<S: Recordable, R: Recorder<S>> Observer<S> for ExpectedValue<'_, R> {
     fn observe(&mut self, current: &S, proposed: &S, a: f64, kind: usize) {
         // A proposal that could not be made is observed as the current state proposed to itself
         // (`Chain::fail`): no independent sample was drawn, so it does not count as one.
-        let large =
-            self.large_steps.is_some_and(|l| l.kind == kind) && !std::ptr::eq(current, proposed);
+        let made = !std::ptr::eq(current, proposed);
+        if let Some(t) = self.tally.as_deref_mut()
+            && made
+            && t.kind == kind
+        {
+            t.add(proposed.group(), proposed.contribution().importance);
+        }
+        let large = made && self.large_steps.is_some_and(|l| l.kind == kind);
         self.record(current, 1.0 - a);
-        self.record(proposed, a + if large { 1.0 } else { 0.0 });
+        if self.tally.is_none() {
+            self.record(proposed, a + if large { 1.0 } else { 0.0 });
+            return;
+        }
+        self.record(proposed, a);
+        // The large step's candidate once more, as the large steps' own estimate: not the
+        // chain's, so its scale stays (`b_g` enters it only through the balance heuristic).
+        if large && let Some(k) = self.scale(proposed) {
+            self.recorder.record(proposed, k);
+        }
     }
 }
 
@@ -131,18 +213,55 @@ pub trait Sink<S>: Send {
     fn absorb(&mut self, chunk: Self::Chunk);
     /// The chains have made `mutations` mutations in all, on an image of `pixels` pixels.
     fn mutations_done(&mut self, mutations: u64, pixels: f64);
+    /// What the chains of group `g` recorded by [`Recorder::record_chain`], so far and from now
+    /// on, counts `scales[g]` times (the refined normalisation over the bootstrap's). A sink
+    /// whose recorders keep no groups apart ignores it, and keeps the bootstrap's
+    /// normalisation.
+    fn chain_scales(&mut self, _scales: &[f64]) {}
+}
+
+/// What one group of chains deposits on the film in a round: splats, and the splats of the
+/// chains' own estimate with their group (the film's splat layer of that group).
+#[derive(Clone, Debug, Default)]
+pub struct FilmChunk {
+    splats: Vec<Splat>,
+    chain: Vec<(usize, Splat)>,
+}
+
+impl<S: Recordable> Recorder<S> for FilmChunk {
+    #[inline]
+    fn record(&mut self, state: &S, weight: f64) {
+        self.splats.record(state, weight);
+    }
+
+    #[inline]
+    fn record_chain(&mut self, state: &S, weight: f64) {
+        let g = state.group();
+        for &(r, v) in &state.contribution().splats {
+            self.chain.push((g, (r, v * weight)));
+        }
+    }
 }
 
 impl<S: Recordable> Sink<S> for Film {
-    type Chunk = Vec<Splat>;
+    type Chunk = FilmChunk;
 
-    fn chunk(&self) -> Vec<Splat> {
-        Vec::new()
+    fn chunk(&self) -> FilmChunk {
+        FilmChunk::default()
     }
 
-    fn absorb(&mut self, chunk: Vec<Splat>) {
-        for (r, v) in chunk {
+    fn absorb(&mut self, chunk: FilmChunk) {
+        for (r, v) in chunk.splats {
             self.add_splat(r, v);
+        }
+        for (g, (r, v)) in chunk.chain {
+            self.add_layer_splat(g, r, v);
+        }
+    }
+
+    fn chain_scales(&mut self, scales: &[f64]) {
+        for (g, &k) in scales.iter().enumerate() {
+            self.set_layer_scale(g, k);
         }
     }
 
@@ -185,6 +304,7 @@ mod tests {
                 probability: 0.5,
                 group_normalisation: &b,
             }),
+            tally: None,
         };
         let (x, y) = (state(), state());
         rec.observe(&x, &y, 0.0, 1); // made and rejected: x with 1 − a, y as a sample
@@ -193,5 +313,48 @@ mod tests {
         // Each deposit is 2 · b / (I + p b_0) = 2 / 2.5.
         let values: Vec<f64> = splats.iter().map(|s| s.1.max_component()).collect();
         assert_eq!(values, [0.8; 4]);
+    }
+
+    /// With a tally the chains' deposits go to their group's layer and the large step's second
+    /// deposit stays apart; the tally counts the candidates of large steps that were made, with
+    /// non-finite importance as 0.
+    #[test]
+    fn a_tally_counts_the_candidates_of_large_steps_made() {
+        let b = [1.0];
+        let mut chunk = FilmChunk::default();
+        let mut tally = NormalisationTally::new(1, 1);
+        let mut rec = ExpectedValue {
+            recorder: &mut chunk,
+            b: 1.0,
+            large_steps: Some(LargeStepMis {
+                kind: 1,
+                probability: 0.5,
+                group_normalisation: &b,
+            }),
+            tally: Some(&mut tally),
+        };
+        let (x, y) = (state(), state());
+        let mut z = state();
+        z.0.importance = f64::NAN;
+        rec.observe(&x, &y, 0.25, 1); // made: counted, y's independent deposit apart
+        rec.observe(&x, &x, 0.0, 1); // not made: not counted
+        rec.observe(&x, &y, 0.5, 0); // a small step: not counted
+        rec.observe(&x, &z, 0.0, 1); // made, importance NaN: counted as 0
+        assert_eq!(tally.count, [2]);
+        assert_eq!(tally.sum, [2.0]);
+        // 2 · b / (I + p b_0) = 0.8 per unit weight.
+        let chain: Vec<f64> = chunk.chain.iter().map(|s| s.1.1.max_component()).collect();
+        let expected = [0.6, 0.2, 0.8, 0.4, 0.4, 0.8];
+        assert_eq!(chain.len(), expected.len());
+        assert!(
+            chain
+                .iter()
+                .zip(expected)
+                .all(|(c, e)| (c - e).abs() < 1e-15),
+            "{chain:?}"
+        );
+        assert!(chunk.chain.iter().all(|s| s.0 == 0));
+        let independent: Vec<f64> = chunk.splats.iter().map(|s| s.1.max_component()).collect();
+        assert_eq!(independent, [0.8]);
     }
 }

@@ -251,6 +251,7 @@ impl Estimator for Erpt {
             recorder: splats,
             b: self.quantum / n as f64,
             large_steps: None,
+            tally: None,
         };
         for (state, e) in seeds {
             let count = (e / self.quantum + uniform(stream.rng())).floor() as u64;

@@ -101,6 +101,7 @@ pub fn settings(bootstrap: usize, mutations_per_pixel: f64, seed: u64) -> Metrop
         budget: Budget::SamplesPerPixel(mutations_per_pixel),
         seed,
         seeding: Seeding::Resample,
+        refine_normalisation: true,
     }
 }
 
