@@ -130,33 +130,18 @@ impl Film {
         }
     }
 
-    /// Add another film's accumulation (same size). A splat layer this film lacks comes with its
-    /// scale; one it has with another scale enters the splat buffer as it counts now. Merging
-    /// in a fixed order keeps results independent of the thread count.
+    /// Add another film's accumulation (same size); its splat layers enter this film's splat
+    /// buffer as they count now (times their scale). Merging in a fixed order keeps results
+    /// independent of the thread count.
     pub fn merge(&mut self, o: &Film) {
         for i in 0..self.pixel_sum.len() {
             self.pixel_sum[i] += o.pixel_sum[i];
             self.pixel_count[i] += o.pixel_count[i];
             self.splat_sum[i] += o.splat_sum[i];
         }
-        for (k, l) in o
-            .layers
-            .iter()
-            .enumerate()
-            .filter(|(_, l)| !l.sum.is_empty())
-        {
-            let mine = self.layer(k, false);
-            if mine.sum.is_empty() {
-                *mine = l.clone();
-            } else if mine.scale == l.scale {
-                for (a, b) in mine.sum.iter_mut().zip(&l.sum) {
-                    *a += *b;
-                }
-            } else {
-                // Other scales: the other layer enters as it counts now.
-                for (a, b) in self.splat_sum.iter_mut().zip(&l.sum) {
-                    *a += *b * l.scale;
-                }
+        for l in o.layers.iter().filter(|l| !l.sum.is_empty()) {
+            for (a, b) in self.splat_sum.iter_mut().zip(&l.sum) {
+                *a += *b * l.scale;
             }
         }
         self.splat_scale += o.splat_scale;
@@ -259,8 +244,8 @@ mod tests {
         assert!(img.iter().all(|p| p.is_finite()));
     }
 
-    /// A splat layer counts times its scale, set before or after its splats; a merge carries a
-    /// layer the film lacks with its scale and one it has with another scale as it counts now.
+    /// A splat layer counts times its scale, set before or after its splats; a merge adds
+    /// another film's layers as they count at the merge.
     #[test]
     fn splat_layers_count_times_their_scale() {
         let mut a = Film::new(2, 1);
@@ -282,9 +267,10 @@ mod tests {
         b.merge(&c);
         b.splat_scale = 2.0;
         assert_eq!(b.image(), [Rgb::splat(2.0), Rgb::splat(1.0)]);
-        b.set_layer_scale(1, 1.0);
-        // a's layer rescales, c's entered as it counted at the merge.
-        assert_eq!(b.image(), [Rgb::splat(3.0), Rgb::splat(1.0)]);
+        // Merged layers entered as they counted: a later scale of this film's own layer 1
+        // (it has none) changes nothing.
+        b.set_layer_scale(1, 4.0);
+        assert_eq!(b.image(), [Rgb::splat(2.0), Rgb::splat(1.0)]);
     }
 
     #[test]
