@@ -69,9 +69,10 @@ pub struct MetropolisArgs {
     /// Bootstrap samples (per path length for mmlt).
     #[arg(long, default_value_t = 100_000)]
     pub bootstrap: usize,
-    /// PSSMLT and MMLT: refine the bootstrap's normalisation with the large steps' candidates as
-    /// the chains run, so the image's overall scale converges with the render instead of staying
-    /// at the bootstrap's error (README). false: the bootstrap's alone.
+    /// PSSMLT, MMLT, MLT and MEMLT: refine the bootstrap's normalisation with the chains'
+    /// independent candidates (large steps; new paths) as they run, so the image's overall scale
+    /// converges with the render instead of keeping the bootstrap's error (README). false: the
+    /// bootstrap's alone.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     pub refine_normalisation: bool,
     /// Scalar importance of colours.

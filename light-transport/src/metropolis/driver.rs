@@ -94,6 +94,14 @@ pub trait Method: Sync {
     fn independent_proposals(&self) -> Option<usize> {
         self.large_steps().map(|(kind, _)| kind)
     }
+    /// Whether the chains move between groups (path-space MLT's change path length), so that
+    /// the groups matter to the bootstrap only: the chains' deposits (all in group 0,
+    /// [`Recordable::group`]) are then rescaled by the refined total `b` over the bootstrap's.
+    /// `false` by default: chains stay in their group and each group's deposits are rescaled
+    /// by its own `b_g`.
+    fn chains_span_groups(&self) -> bool {
+        false
+    }
     /// Told the per-group normalisations `b_g` once the bootstrap is done, before any chain runs
     /// (e.g. to choose path lengths in proportion to their energy).
     fn bootstrap_done(&self, _group_normalisation: &[f64]) {}
@@ -421,6 +429,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let tally_kind = method
         .independent_proposals()
         .filter(|_| settings.refine_normalisation);
+    let spans = method.chains_span_groups();
     let mut tally = tally_kind.map(|kind| {
         let mut t = NormalisationTally::new(kind, groups);
         for (g, b) in stats.group_normalisation.iter().enumerate() {
@@ -494,16 +503,21 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
         }
         if let Some(t) = &tally {
             refine(&mut stats, t, settings.bootstrap as u64);
-            let scales: Vec<f64> = (0..groups)
-                .map(|g| {
-                    let c = group_b[g];
-                    if c > 0.0 {
-                        stats.refined_normalisation[g] / c
-                    } else {
-                        1.0
-                    }
-                })
-                .collect();
+            let refined: f64 = stats.refined_normalisation.iter().sum();
+            let scales: Vec<f64> = if spans {
+                vec![refined / b]
+            } else {
+                (0..groups)
+                    .map(|g| {
+                        let c = group_b[g];
+                        if c > 0.0 {
+                            stats.refined_normalisation[g] / c
+                        } else {
+                            1.0
+                        }
+                    })
+                    .collect()
+            };
             sink.chain_scales(&scales);
         }
         sink.mutations_done(stats.mutations, pixels);

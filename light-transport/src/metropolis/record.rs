@@ -30,6 +30,13 @@ pub trait Recordable {
     fn group(&self) -> usize {
         0
     }
+    /// As a candidate of the method's independent proposals
+    /// ([`super::Method::independent_proposals`]), which are drawn as the bootstrap's samples
+    /// are: the bootstrap group it is a sample of, and its bootstrap weight. By default the
+    /// state's group and importance (a sample of unit density, as a large step's).
+    fn independent_weight(&self) -> (usize, f64) {
+        (self.group(), self.contribution().importance)
+    }
 }
 
 /// Receives what chain states deposit.
@@ -95,11 +102,14 @@ impl NormalisationTally {
         }
     }
 
-    /// Count a candidate of group `g` with importance `i`.
+    /// Count a sample of group `g` with weight `w` (a non-finite or negative weight counts as 0;
+    /// a group outside the tally, which no method's bootstrap has, not at all).
     #[inline]
-    fn add(&mut self, g: usize, i: f64) {
-        self.sum[g] += if i.is_finite() && i > 0.0 { i } else { 0.0 };
-        self.count[g] += 1;
+    fn add(&mut self, g: usize, w: f64) {
+        if let (Some(s), Some(c)) = (self.sum.get_mut(g), self.count.get_mut(g)) {
+            *s += if w.is_finite() && w > 0.0 { w } else { 0.0 };
+            *c += 1;
+        }
     }
 
     /// Add another tally's counts (in a fixed order, for results independent of the threads).
@@ -186,7 +196,8 @@ impl<S: Recordable, R: Recorder<S>> Observer<S> for ExpectedValue<'_, R> {
             && made
             && t.kind == kind
         {
-            t.add(proposed.group(), proposed.contribution().importance);
+            let (g, w) = proposed.independent_weight();
+            t.add(g, w);
         }
         let large = made && self.large_steps.is_some_and(|l| l.kind == kind);
         self.record(current, 1.0 - a);

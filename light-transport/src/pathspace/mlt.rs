@@ -182,6 +182,18 @@ impl Method for PathMlt {
         Mutations::kinds()
     }
 
+    fn independent_proposals(&self) -> Option<usize> {
+        // A new path is drawn as a bootstrap sample is (its length from `P_len`).
+        let name = super::new_path::REGISTRATION.name;
+        (self.mutations.probabilities.probability(name) > 0.0)
+            .then(|| super::mutations::index_of(name))
+            .flatten()
+    }
+
+    fn chains_span_groups(&self) -> bool {
+        true
+    }
+
     fn warm_up(&self, scene: &Scene, chains: &[Chain<PathState>], seed: u64) -> Result<()> {
         let m = &self.mutations;
         let manifold = m

@@ -80,6 +80,21 @@ impl Recordable for PathState {
     fn contribution(&self) -> &Contribution {
         &self.contribution
     }
+
+    /// A new path of `k` edges is drawn as a bootstrap sample of length `k` is (strategy
+    /// uniform in `0 … k`; [`super::new_path`]), whatever the chance of its length: the bootstrap
+    /// weight `(k + 1) I` of group `k − 1`. A new path whose walk failed has no vertices left
+    /// but carries its length in its change (`added = k + 1` vertices), and weight 0.
+    fn independent_weight(&self) -> (usize, f64) {
+        let k = match (self.path.vertices.is_empty(), self.change) {
+            (true, Some(c)) => c.added.saturating_sub(1),
+            _ => self.path.edges(),
+        };
+        (
+            k.saturating_sub(1),
+            (k + 1) as f64 * self.contribution.importance,
+        )
+    }
 }
 
 thread_local! {

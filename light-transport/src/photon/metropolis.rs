@@ -354,6 +354,8 @@ pub struct PhotonSink<'a> {
     seed: u64,
     photons: HashMap<[u64; 7], (bool, Photon)>,
     mutations: u64,
+    /// The refined normalisation over the bootstrap's (every photon is the chains' deposit).
+    chain_scale: f64,
     capped: u64,
     deposits: u64,
 }
@@ -385,6 +387,11 @@ impl<'a> Sink<PathState> for PhotonSink<'a> {
 
     fn mutations_done(&mut self, mutations: u64, _pixels: f64) {
         self.mutations = mutations;
+    }
+
+    fn chain_scales(&mut self, scales: &[f64]) {
+        // Path-space chains span the path lengths: one scale, of group 0, where they record.
+        self.chain_scale = scales.first().copied().unwrap_or(1.0);
     }
 }
 
@@ -535,6 +542,7 @@ pub fn sample_photons(
         seed: settings.metropolis.seed ^ 0x3F5,
         photons: HashMap::new(),
         mutations: 0,
+        chain_scale: 1.0,
         capped: 0,
         deposits: 0,
     };
@@ -546,7 +554,7 @@ pub fn sample_photons(
         stop,
         |_, m, e| progress(m, e),
     )?;
-    let scale = 1.0 / sink.mutations.max(1) as f64;
+    let scale = sink.chain_scale / sink.mutations.max(1) as f64;
     let (mut global, mut caustic) = (Vec::new(), Vec::new());
     // A fixed order (the hash map's is not).
     let mut all: Vec<([u64; 7], (bool, Photon))> = sink.photons.into_iter().collect();
