@@ -202,7 +202,7 @@ fn pass_key(seed: u64, pass: u64) -> u64 {
 /// and adds the rays traced to `rays`. Deterministic in `(sampling, pass)`, whatever the thread
 /// count.
 ///
-/// The pass is cut into [`CHUNKS`] runs of pixels, handed to the threads in order; each chunk's
+/// The pass is cut into `CHUNKS` runs of pixels, handed to the threads in order; each chunk's
 /// estimates and splats enter the film in chunk order (so the film's sums do not depend on the
 /// threads), as soon as every earlier chunk has. Only the chunks in flight, and those finished
 /// ahead of a slower earlier one, hold their splats at a time: estimators that splat a lot

@@ -86,11 +86,12 @@ pub trait Method: Sync {
     fn large_steps(&self) -> Option<(usize, f64)> {
         None
     }
-    /// The move kind whose candidates are independent samples of unit density over their
-    /// group's space, drawn as a bootstrap sample is (Kelemen's large step), whether or not they
-    /// are also counted by [`Method::large_steps`]: the driver sums their importance to refine
-    /// each group's normalisation ([`MetropolisSettings::refine_normalisation`]). By default the
-    /// kind of [`Method::large_steps`].
+    /// The move kind whose candidates are drawn as bootstrap samples are (Kelemen's large step;
+    /// path-space MLT's new path), whether or not they are also counted by
+    /// [`Method::large_steps`]: the driver adds their bootstrap weight
+    /// ([`Recordable::independent_weight`]) to their group's bootstrap sums to refine its
+    /// normalisation ([`MetropolisSettings::refine_normalisation`]). By default the kind of
+    /// [`Method::large_steps`].
     fn independent_proposals(&self) -> Option<usize> {
         self.large_steps().map(|(kind, _)| kind)
     }

@@ -166,8 +166,8 @@ impl<R> ExpectedValue<'_, R> {
         Some(self.b / (i + independent))
     }
 
-    /// Deposit `w` times the state's contribution to the chain's estimate, scaled by
-    /// [`ExpectedValue::scale`].
+    /// Deposit `w` times the state's contribution to the chain's estimate, scaled by `b / I`
+    /// (or `b / (I + p b_g)`).
     #[inline]
     pub fn record<S: Recordable>(&mut self, s: &S, w: f64)
     where
