@@ -6,7 +6,9 @@
 //! * Large steps combined with the chain by the balance heuristic keep the toy unbiased, with one
 //!   group and two; a wrong probability, the wrong move kind or one group's `b_g` for all is
 //!   caught. The normalisation refined by the large steps keeps it unbiased and steadies its
-//!   scale; small steps taken for independent samples are caught.
+//!   scale; small steps taken for independent samples are caught. Path-space MLT's normalisation
+//!   refined by its new paths agrees with independent bootstraps; bidirectional mutations taken
+//!   for independent samples are caught.
 //! * A sampler that is not a deterministic function of its numbers is refused (replay check).
 //! * PSSMLT, MMLT, path-space MLT, MEMLT and CMLT with direct lighting rendered apart converge to
 //!   BDPT too; direct light counted twice is caught (MMLT, MLT); a render stopped in the direct
