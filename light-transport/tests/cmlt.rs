@@ -13,6 +13,9 @@
 //!   IPSM and path-space mutations in their chart-keeping form too; an exchange accepted without
 //!   eq. 24's ratio is caught that way. Exchanges pair chains of one length in different charts,
 //!   independently of their paths, and the image does not depend on the thread count.
+//! * Every large-step candidate, failed walks included, is a bootstrap sample of its chain's
+//!   length and chart with the bootstrap's weight (what refines the normalisation; its
+//!   agreement with independent bootstraps is in `metropolis.rs`).
 //!
 //! Statistical verdicts as in `metropolis.rs`: Welch t-tests per 6×6 block between 8 independent
 //! runs and 16 BDPT (or plain Monte Carlo) batches, Holm-corrected, α = 1e-4 per comparison: 13
@@ -26,12 +29,12 @@ use common::{
     settings, with_threads,
 };
 use light_transport::cmlt::{
-    Cmlt, CmltSettings, CmltState, DensityEstimation, SwapKind, TechniqueChart,
+    Cmlt, CmltSettings, CmltState, DensityEstimation, LARGE_STEP, SwapKind, TechniqueChart,
 };
 use light_transport::film::Image;
 use light_transport::film::{Film, Splat};
 use light_transport::metropolis::{
-    ImportanceKind, Method, MetropolisSettings, Recorder, Sink, run_with,
+    ImportanceKind, Method, MetropolisSettings, Recordable, Recorder, Sink, run_with,
 };
 use light_transport::scene::{Scene, builtin};
 use mcmc_charts::Chart;
@@ -567,6 +570,88 @@ fn replica_exchange_images_do_not_depend_on_the_thread_count() {
         })
     };
     assert_eq!(render(1), render(2));
+}
+
+/// Records every large step that was made: its candidate's group, stratum and bootstrap weight,
+/// with what the bootstrap would have computed for it.
+struct LargeSteps<'a> {
+    target: &'a light_transport::cmlt::TechniqueTarget<'a>,
+    k: usize,
+    made: usize,
+    failed: usize,
+}
+
+impl Observer<CmltState> for LargeSteps<'_> {
+    fn observe(&mut self, current: &CmltState, proposed: &CmltState, _: f64, kind: usize) {
+        if kind != LARGE_STEP || std::ptr::eq(current, proposed) {
+            return;
+        }
+        self.made += 1;
+        let x = proposed.independent_weight();
+        assert_eq!((x.group, x.stratum), (self.k - 1, proposed.chart));
+        // The bootstrap's weight of a sample in this chart at these coordinates.
+        let mut fresh = CmltState::in_chart(proposed.chart, proposed.u.clone());
+        let ln = mcmc_core::Family::ln_density(self.target, proposed.chart, &mut fresh);
+        if !proposed.valid {
+            self.failed += 1;
+            assert_eq!(x.weight, 0.0, "a failed candidate counts as a zero sample");
+            assert!(!fresh.valid);
+            return;
+        }
+        let expected = (self.k + 1) as f64 * if ln.is_finite() { ln.exp() } else { 0.0 };
+        assert!(
+            (x.weight - expected).abs() <= 1e-12 * expected,
+            "weight {} against the bootstrap's {expected}",
+            x.weight
+        );
+    }
+}
+
+/// Charted MLT refines its normalisation with its large steps (`Recordable::independent_weight`
+/// of a `CmltState`): every candidate a chain's large step makes, the ones whose technique walk
+/// failed included, is a sample of its chain's path length and of its chart's stratum, with the
+/// weight the bootstrap gives a sample at the same chart and coordinates (0 when the walk
+/// failed). Checked over 4 000 mutations of a chain of every length on `door`, where walks
+/// mostly fail (connections through the gap are mostly occluded), and on `cornell`, where they
+/// mostly succeed.
+#[test]
+fn large_step_candidates_are_bootstrap_samples_of_their_length_and_chart() {
+    let (mut made, mut failed) = (0, 0);
+    for name in ["door", "cornell"] {
+        let scene = scene(name);
+        let m = cmlt(&scene, 0.0, 0.0);
+        for k in 1..=MAX_EDGES {
+            let atlas = m.atlas(&scene, k);
+            let target = Cmlt::target(&atlas);
+            let Some((state, _)) = (0..10_000)
+                .map(|i| m.independent(&scene, k - 1, 77 + i))
+                .find(|(_, w)| *w > 0.0)
+            else {
+                continue;
+            };
+            let ln = m.ln_density(&scene, &state);
+            let mut chain = Chain::with_density(state, ln).unwrap();
+            let mut rng = mcmc_core::rng::stream(5, k as u64);
+            let mut observer = LargeSteps {
+                target: &target,
+                k,
+                made: 0,
+                failed: 0,
+            };
+            m.mutate(&scene, &mut chain, 4000, &mut rng, &mut observer);
+            println!(
+                "{name}, k = {k}: {} large steps, {} failed walks",
+                observer.made, observer.failed
+            );
+            assert!(observer.made > 800, "{}", observer.made);
+            made += observer.made;
+            failed += observer.failed;
+        }
+    }
+    assert!(
+        failed > 1000 && made - failed > 1000,
+        "made {made}, failed {failed}"
+    );
 }
 
 /// The bias of the approximate merge density, against the radius (ignored: about 3 minutes;

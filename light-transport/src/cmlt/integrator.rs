@@ -38,7 +38,9 @@
 use super::density_estimation::{DensityEstimation, LightVertices, MergeCounters, MergeSampler};
 use super::light_vertex_map::LightVertexMap;
 use super::technique::{TechniqueChart, unit_integrand};
-use crate::metropolis::{DIRECT_EDGES, DirectApart, ImportanceKind, Method, Recordable};
+use crate::metropolis::{
+    BootstrapSample, DIRECT_EDGES, DirectApart, ImportanceKind, Method, Recordable,
+};
 use crate::pathspace::{
     MutationProbabilities, Mutations, NewPath, PathState, PerturbationSettings,
 };
@@ -62,6 +64,30 @@ pub type CmltState = ChartState<PathState>;
 impl Recordable for CmltState {
     fn contribution(&self) -> &crate::metropolis::Contribution {
         &self.x.contribution
+    }
+
+    /// Path length − 1. A chain of `k` edges keeps every state and candidate it holds at `k`
+    /// edges, valid or not: every move writes paths of its own length, and a failed technique
+    /// walk leaves the candidate's path as it was.
+    fn group(&self) -> usize {
+        self.x.path.edges().saturating_sub(1)
+    }
+
+    /// A large step's candidate: coordinates uniform in the chain's chart `s`, so a sample of
+    /// the bootstrap's stratum `s` ([`Cmlt::sample_independent`]), of bootstrap weight
+    /// `(k + 1) π_s(u)` (0 where the chart's map failed).
+    fn independent_weight(&self) -> BootstrapSample {
+        let k = self.x.path.edges();
+        let valid = self.valid && self.fresh;
+        BootstrapSample {
+            group: self.group(),
+            stratum: self.chart,
+            weight: if valid {
+                (k + 1) as f64 * self.x.contribution.importance
+            } else {
+                0.0
+            },
+        }
     }
 }
 
@@ -181,6 +207,8 @@ pub const MERGE_KINDS: [&str; 2] = [
     "density estimation: merge",
     "density estimation: connection",
 ];
+/// The large step's kind (in [`KINDS`]).
+pub const LARGE_STEP: usize = 1;
 pub(super) const SWAP: usize = 2;
 const PILOT: u64 = 0xC417;
 const LIGHT_VERTICES: u64 = 0x11_6487;
@@ -337,7 +365,7 @@ impl Cmlt {
             return 0.0;
         }
         let mut rng = stream(seed, 0);
-        let s = uniform_index(uniform(&mut rng), k + 1);
+        let s = Self::bootstrap_chart(k, &mut rng);
         let atlas = self.atlas(scene, k);
         let target = Self::target(&atlas);
         state.move_to(s, (0..atlas.dim(s)).map(|_| uniform(&mut rng)));
@@ -349,6 +377,12 @@ impl Cmlt {
         } else {
             0.0
         }
+    }
+
+    /// The chart of an independent sample of `k` edges: uniform in `0 … k`, the first number
+    /// of its stream.
+    fn bootstrap_chart(k: usize, rng: &mut ChainRng) -> usize {
+        uniform_index(uniform(rng), k + 1)
     }
 
     /// The technique charts of paths of `k` edges (`s = 0 … k`).
@@ -531,6 +565,21 @@ impl Method for Cmlt {
                 std::cell::RefCell::new(CmltState::in_chart(0, Vec::new()));
         }
         STATE.with_borrow_mut(|state| self.sample_independent(scene, g, seed, state))
+    }
+
+    /// The bootstrap picks a chart uniformly: its `k + 1` charts are the strata of length `k`.
+    fn strata(&self, g: usize) -> usize {
+        g + 2
+    }
+
+    fn bootstrap_stratum(&self, g: usize, seed: u64) -> usize {
+        Self::bootstrap_chart(g + 1, &mut stream(seed, 0))
+    }
+
+    /// The large step, whose candidate is uniform in the chain's chart: a bootstrap sample of
+    /// that chart's stratum. None without large steps.
+    fn independent_proposals(&self) -> Option<usize> {
+        (self.settings.large_step > 0.0).then_some(LARGE_STEP)
     }
 
     fn ln_density(&self, scene: &Scene, state: &CmltState) -> f64 {

@@ -10,8 +10,8 @@ pub mod technique;
 
 pub use density_estimation::{DensityEstimation, LightVertices, MergeCounters, MergeSampler};
 pub use integrator::{
-    Cmlt, CmltKernel, CmltMove, CmltSettings, CmltState, SwapKind, TechniqueAtlas, TechniqueJoint,
-    TechniqueTarget, UnitIntegrand,
+    Cmlt, CmltKernel, CmltMove, CmltSettings, CmltState, LARGE_STEP, SwapKind, TechniqueAtlas,
+    TechniqueJoint, TechniqueTarget, UnitIntegrand,
 };
 pub use light_vertex_map::LightVertexMap;
 pub use technique::{

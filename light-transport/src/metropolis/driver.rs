@@ -5,7 +5,9 @@
 //! master seed; chains are processed in fixed groups whose splats are applied to the film in group
 //! order after every round, so the image is identical for any thread count.
 
-use super::record::{ExpectedValue, LargeStepMis, NormalisationTally, Recordable, Sink};
+use super::record::{
+    BootstrapSample, ExpectedValue, LargeStepMis, NormalisationTally, Recordable, Sink,
+};
 use crate::budget::Budget;
 use crate::film::Film;
 use crate::scene::Scene;
@@ -94,6 +96,19 @@ pub trait Method: Sync {
     /// [`Method::large_steps`].
     fn independent_proposals(&self) -> Option<usize> {
         self.large_steps().map(|(kind, _)| kind)
+    }
+    /// The number of strata of group `g`'s bootstrap: a method whose independent sample first
+    /// picks one of `n` strata uniformly (charted MLT: a technique chart) and whose chains draw
+    /// samples of one stratum at a time (a large step in the chain's chart) has its
+    /// normalisation refined stratum by stratum ([`super::record::NormalisationTally`]). 1 by
+    /// default.
+    fn strata(&self, _g: usize) -> usize {
+        1
+    }
+    /// The stratum [`Method::independent`]`(scene, g, seed)` falls in (of [`Method::strata`];
+    /// 0 by default).
+    fn bootstrap_stratum(&self, _g: usize, _seed: u64) -> usize {
+        0
     }
     /// Whether the chains move between groups (path-space MLT's change path length), so that
     /// the groups matter to the bootstrap only: the chains' deposits (all in group 0,
@@ -281,15 +296,17 @@ fn key(seed: u64, g: usize, i: usize) -> u64 {
 }
 
 /// The normalisation of every group from the bootstrap and the chains' independent samples of
-/// `tally` (which holds both).
+/// `tally` (which holds both); a group with a stratum the bootstrap never drew keeps the
+/// bootstrap's value.
 fn refine(stats: &mut MetropolisStats, tally: &NormalisationTally, bootstrap: u64) {
-    stats.refined_normalisation = tally
-        .sum
-        .iter()
-        .zip(&tally.count)
-        .map(|(s, &n)| if n > 0 { s / n as f64 } else { 0.0 })
+    stats.refined_normalisation = (0..stats.group_normalisation.len())
+        .map(|g| {
+            tally
+                .normalisation(g)
+                .unwrap_or(stats.group_normalisation[g])
+        })
         .collect();
-    stats.independent_samples = tally.count.iter().map(|n| n - bootstrap).sum();
+    stats.independent_samples = tally.samples() - bootstrap * tally.count.len() as u64;
 }
 
 /// Run `method` on `scene` into a film. `progress(film, mutations done, elapsed)` is called
@@ -431,11 +448,21 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
         .independent_proposals()
         .filter(|_| settings.refine_normalisation);
     let spans = method.chains_span_groups();
+    let strata: Vec<usize> = (0..groups).map(|g| method.strata(g).max(1)).collect();
     let mut tally = tally_kind.map(|kind| {
-        let mut t = NormalisationTally::new(kind, groups);
-        for (g, b) in stats.group_normalisation.iter().enumerate() {
-            t.sum[g] = b * settings.bootstrap as f64;
-            t.count[g] = settings.bootstrap as u64;
+        let mut t = NormalisationTally::new(kind, &strata);
+        for (j, &weight) in weights.iter().enumerate() {
+            let (group, i) = (j / settings.bootstrap, j % settings.bootstrap);
+            let stratum = if strata[group] > 1 {
+                method.bootstrap_stratum(group, key(settings.seed, group, i))
+            } else {
+                0
+            };
+            t.add(BootstrapSample {
+                group,
+                stratum,
+                weight,
+            });
         }
         t
     });
@@ -455,7 +482,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
         let mut outputs: Vec<(K::Chunk, u64, Option<NormalisationTally>)> =
             (0..chains.len().div_ceil(size))
                 .map(|_| {
-                    let t = tally_kind.map(|kind| NormalisationTally::new(kind, groups));
+                    let t = tally_kind.map(|kind| NormalisationTally::new(kind, &strata));
                     (sink.chunk(), 0, t)
                 })
                 .collect();

@@ -23,6 +23,6 @@ pub use driver::{Method, MetropolisSettings, MetropolisStats, Seeding, run, run_
 pub use importance::ImportanceKind;
 pub use mmlt::Mmlt;
 pub use pssmlt::{PrimaryProposal, PrimaryState, PrimaryTarget, Pssmlt, mutate_primary};
-pub use record::{Contribution, ExpectedValue, Recordable, Recorder, Sink};
+pub use record::{BootstrapSample, Contribution, ExpectedValue, Recordable, Recorder, Sink};
 pub use separate_direct::{DIRECT_EDGES, DirectApart, SeparateDirect};
 pub use stream::PrimaryStream;

@@ -32,11 +32,28 @@ pub trait Recordable {
     }
     /// As a candidate of the method's independent proposals
     /// ([`super::Method::independent_proposals`]), which are drawn as the bootstrap's samples
-    /// are: the bootstrap group it is a sample of, and its bootstrap weight. By default the
-    /// state's group and importance (a sample of unit density, as a large step's).
-    fn independent_weight(&self) -> (usize, f64) {
-        (self.group(), self.contribution().importance)
+    /// of one stratum are: the group and stratum it is a sample of, and its bootstrap weight.
+    /// By default the state's group, stratum 0 and its importance (a sample of unit density, as
+    /// a large step's).
+    fn independent_weight(&self) -> BootstrapSample {
+        BootstrapSample {
+            group: self.group(),
+            stratum: 0,
+            weight: self.contribution().importance,
+        }
     }
+}
+
+/// Where an independent sample falls in the bootstrap, and its weight there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BootstrapSample {
+    /// Its group.
+    pub group: usize,
+    /// Its stratum in the group ([`super::Method::strata`]; 0 for a method without strata).
+    pub stratum: usize,
+    /// Its bootstrap weight: importance over the density of a bootstrap sample, the choice of
+    /// its stratum included.
+    pub weight: f64,
 }
 
 /// Receives what chain states deposit.
@@ -77,47 +94,88 @@ pub struct ExpectedValue<'a, R> {
     pub tally: Option<&'a mut NormalisationTally>,
 }
 
-/// Independent samples the chains draw as they run, summed per group to refine the bootstrap's
-/// normalisation `b_g` (Kelemen et al. 2002 §4 estimate `b` from the large steps: a large step's
-/// candidate is a sample of unit density over its group's primary space, so the mean of its
-/// importance is an unbiased estimate of `b_g`, as a bootstrap sample's is).
+/// Independent samples the chains draw as they run, summed per group and stratum to refine the
+/// bootstrap's normalisation `b_g` (Kelemen et al. 2002 §4 estimate `b` from the large steps: a
+/// large step's candidate is a sample of unit density over its group's primary space, so the mean
+/// of its importance is an unbiased estimate of `b_g`, as a bootstrap sample's is).
+///
+/// A method whose bootstrap first picks one of `n` strata uniformly (charted MLT: a technique
+/// chart) and whose chains draw samples of one stratum at a time (a large step in the chain's
+/// chart) gets a post-stratified estimate: `b_g = (1/n) Σ_s` (mean bootstrap weight in stratum
+/// `s`), each mean over the bootstrap's and the chains' samples of that stratum. With one
+/// stratum that is the plain mean.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct NormalisationTally {
     /// The move kind whose candidates are independent samples.
     pub kind: usize,
-    /// Sum of their importance per group (non-finite or negative importance counts as 0, as in
-    /// the bootstrap).
-    pub sum: Vec<f64>,
-    /// Their number per group.
-    pub count: Vec<u64>,
+    /// Sum of their bootstrap weights per group and stratum (non-finite or negative weights
+    /// count as 0, as in the bootstrap).
+    pub sum: Vec<Vec<f64>>,
+    /// Their number per group and stratum.
+    pub count: Vec<Vec<u64>>,
 }
 
 impl NormalisationTally {
-    /// An empty tally of the candidates of move kind `kind` over `groups` groups.
-    pub fn new(kind: usize, groups: usize) -> Self {
+    /// An empty tally of the candidates of move kind `kind` over groups of `strata[g]` strata.
+    pub fn new(kind: usize, strata: &[usize]) -> Self {
         Self {
             kind,
-            sum: vec![0.0; groups],
-            count: vec![0; groups],
+            sum: strata.iter().map(|&n| vec![0.0; n.max(1)]).collect(),
+            count: strata.iter().map(|&n| vec![0; n.max(1)]).collect(),
         }
     }
 
-    /// Count a sample of group `g` with weight `w` (a non-finite or negative weight counts as 0;
-    /// a group outside the tally, which no method's bootstrap has, not at all).
+    /// Count a sample (a non-finite or negative weight counts as 0). A group of one stratum
+    /// takes every sample of the group, whatever stratum it names (its bootstrap is not
+    /// stratified); a group or stratum outside the tally, which no method's bootstrap has, is
+    /// not counted at all.
     #[inline]
-    fn add(&mut self, g: usize, w: f64) {
-        if let (Some(s), Some(c)) = (self.sum.get_mut(g), self.count.get_mut(g)) {
-            *s += if w.is_finite() && w > 0.0 { w } else { 0.0 };
+    pub fn add(&mut self, x: BootstrapSample) {
+        let w = if x.weight.is_finite() && x.weight > 0.0 {
+            x.weight
+        } else {
+            0.0
+        };
+        let stratum = match self.sum.get(x.group) {
+            Some(v) if v.len() == 1 => 0,
+            _ => x.stratum,
+        };
+        if let (Some(s), Some(c)) = (
+            self.sum.get_mut(x.group).and_then(|v| v.get_mut(stratum)),
+            self.count.get_mut(x.group).and_then(|v| v.get_mut(stratum)),
+        ) {
+            *s += w;
             *c += 1;
         }
     }
 
     /// Add another tally's counts (in a fixed order, for results independent of the threads).
     pub fn merge(&mut self, o: &Self) {
-        for g in 0..self.sum.len() {
-            self.sum[g] += o.sum[g];
-            self.count[g] += o.count[g];
+        for (a, b) in self.sum.iter_mut().zip(&o.sum) {
+            a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
         }
+        for (a, b) in self.count.iter_mut().zip(&o.count) {
+            a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
+        }
+    }
+
+    /// The estimate of group `g`'s normalisation, or `None` while a stratum of it has no
+    /// sample.
+    pub fn normalisation(&self, g: usize) -> Option<f64> {
+        let (sum, count) = (self.sum.get(g)?, self.count.get(g)?);
+        let mut b = 0.0;
+        for (s, &n) in sum.iter().zip(count) {
+            if n == 0 {
+                return None;
+            }
+            b += s / n as f64;
+        }
+        Some(b / sum.len() as f64)
+    }
+
+    /// Samples counted in all.
+    pub fn samples(&self) -> u64 {
+        self.count.iter().flatten().sum()
     }
 }
 
@@ -196,8 +254,7 @@ impl<S: Recordable, R: Recorder<S>> Observer<S> for ExpectedValue<'_, R> {
             && made
             && t.kind == kind
         {
-            let (g, w) = proposed.independent_weight();
-            t.add(g, w);
+            t.add(proposed.independent_weight());
         }
         let large = made && self.large_steps.is_some_and(|l| l.kind == kind);
         self.record(current, 1.0 - a);
@@ -333,7 +390,7 @@ mod tests {
     fn a_tally_counts_the_candidates_of_large_steps_made() {
         let b = [1.0];
         let mut chunk = FilmChunk::default();
-        let mut tally = NormalisationTally::new(1, 1);
+        let mut tally = NormalisationTally::new(1, &[1]);
         let mut rec = ExpectedValue {
             recorder: &mut chunk,
             b: 1.0,
@@ -351,8 +408,9 @@ mod tests {
         rec.observe(&x, &x, 0.0, 1); // not made: not counted
         rec.observe(&x, &y, 0.5, 0); // a small step: not counted
         rec.observe(&x, &z, 0.0, 1); // made, importance NaN: counted as 0
-        assert_eq!(tally.count, [2]);
-        assert_eq!(tally.sum, [2.0]);
+        assert_eq!(tally.count, [[2]]);
+        assert_eq!(tally.sum, [[2.0]]);
+        assert_eq!(tally.normalisation(0), Some(1.0));
         // 2 · b / (I + p b_0) = 0.8 per unit weight.
         let chain: Vec<f64> = chunk.chain.iter().map(|s| s.1.1.max_component()).collect();
         let expected = [0.6, 0.2, 0.8, 0.4, 0.4, 0.8];
@@ -367,5 +425,36 @@ mod tests {
         assert!(chunk.chain.iter().all(|s| s.0 == 0));
         let independent: Vec<f64> = chunk.splats.iter().map(|s| s.1.max_component()).collect();
         assert_eq!(independent, [0.8]);
+    }
+
+    /// With strata, `b_g` is the mean over strata of each stratum's mean weight: here the
+    /// weights of stratum 1 come three times as often as stratum 0's, which a plain mean would
+    /// follow. A group of one stratum takes samples of any stratum; a stratum without samples
+    /// leaves the group without an estimate.
+    #[test]
+    fn a_stratified_tally_averages_the_means_of_its_strata() {
+        let sample = |group, stratum, weight| BootstrapSample {
+            group,
+            stratum,
+            weight,
+        };
+        let mut tally = NormalisationTally::new(0, &[2, 1, 3]);
+        tally.add(sample(0, 0, 1.0));
+        for _ in 0..3 {
+            tally.add(sample(0, 1, 3.0));
+        }
+        tally.add(sample(1, 0, 1.0));
+        tally.add(sample(1, 4, 2.0));
+        tally.add(sample(2, 0, f64::INFINITY));
+        tally.add(sample(2, 1, 1.0));
+        tally.add(sample(5, 0, 1.0)); // no such group
+        assert_eq!(tally.normalisation(0), Some(2.0)); // (1 + 3) / 2, not 10 / 4
+        assert_eq!(tally.normalisation(1), Some(1.5));
+        assert_eq!(tally.normalisation(2), None);
+        assert_eq!(tally.samples(), 8);
+        let mut other = NormalisationTally::new(0, &[2, 1, 3]);
+        other.add(sample(2, 2, 6.0));
+        tally.merge(&other);
+        assert_eq!(tally.normalisation(2), Some((0.0 + 1.0 + 6.0) / 3.0));
     }
 }

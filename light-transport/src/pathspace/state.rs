@@ -7,7 +7,7 @@
 
 use super::mutation::Change;
 use super::path::{FullPath, Scratch};
-use crate::metropolis::{Contribution, ImportanceKind, Recordable};
+use crate::metropolis::{BootstrapSample, Contribution, ImportanceKind, Recordable};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use std::cell::RefCell;
@@ -85,15 +85,16 @@ impl Recordable for PathState {
     /// uniform in `0 … k`; [`super::new_path`]), whatever the chance of its length: the bootstrap
     /// weight `(k + 1) I` of group `k − 1`. A new path whose walk failed has no vertices left
     /// but carries its length in its change (`added = k + 1` vertices), and weight 0.
-    fn independent_weight(&self) -> (usize, f64) {
+    fn independent_weight(&self) -> BootstrapSample {
         let k = match (self.path.vertices.is_empty(), self.change) {
             (true, Some(c)) => c.added.saturating_sub(1),
             _ => self.path.edges(),
         };
-        (
-            k.saturating_sub(1),
-            (k + 1) as f64 * self.contribution.importance,
-        )
+        BootstrapSample {
+            group: k.saturating_sub(1),
+            stratum: 0,
+            weight: (k + 1) as f64 * self.contribution.importance,
+        }
     }
 }
 
