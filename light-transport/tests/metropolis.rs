@@ -363,12 +363,12 @@ impl<M: Method> Method for Declared<M> {
             1
         }
     }
-    fn bootstrap_stratum(&self, g: usize, seed: u64) -> usize {
-        if self.stratified {
-            self.method.bootstrap_stratum(g, seed)
-        } else {
-            0
-        }
+    fn independent_weight(&self, scene: &Scene, g: usize, seed: u64) -> f64 {
+        self.method.independent_weight(scene, g, seed)
+    }
+    fn independent_in_stratum(&self, scene: &Scene, g: usize, seed: u64) -> (usize, f64) {
+        let (stratum, w) = self.method.independent_in_stratum(scene, g, seed);
+        (if self.stratified { stratum } else { 0 }, w)
     }
 }
 

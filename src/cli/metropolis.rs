@@ -44,7 +44,8 @@ pub struct MetropolisArgs {
     /// the paths of at most two edges apart from the chains (emitters seen directly or in a
     /// mirror, direct illumination; Mitsuba 0.6's separateDirect; README). The chains then sample
     /// longer paths only. 0: no such pass, chains on every path (also when --max-depth leaves no
-    /// longer paths).
+    /// longer paths). ERPT and MEPT: any value but 0 has their seeds of at most two edges deposit
+    /// their own path-traced estimate instead of starting chains (one per pixel sample).
     #[arg(long, default_value_t = 16)]
     pub direct_samples: usize,
     /// The share of the wall time (bootstrap included) the direct-lighting pass runs for under
@@ -69,10 +70,10 @@ pub struct MetropolisArgs {
     /// Bootstrap samples (per path length for mmlt).
     #[arg(long, default_value_t = 100_000)]
     pub bootstrap: usize,
-    /// PSSMLT, MMLT, MLT and MEMLT: refine the bootstrap's normalisation with the chains'
-    /// independent candidates (large steps; new paths) as they run, so the image's overall scale
-    /// converges with the render instead of keeping the bootstrap's error (README). false: the
-    /// bootstrap's alone.
+    /// PSSMLT, MMLT, MLT, MEMLT and CMLT: refine the bootstrap's normalisation with the chains'
+    /// independent candidates (large steps; new paths; CMLT's large steps chart by chart) as
+    /// they run, so the image's overall scale converges with the render instead of keeping the
+    /// bootstrap's error (README). false: the bootstrap's alone.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     pub refine_normalisation: bool,
     /// Scalar importance of colours.

@@ -358,14 +358,15 @@ impl Cmlt {
     /// An independent sample of path length `g + 1` from generator seed `seed`, evaluated in
     /// `state` (whatever it held before): a chart `s` uniform in `0 … k`, coordinates uniform in
     /// it. Returns the bootstrap weight `(k + 1) π_s(u)` (the chart was chosen with probability
-    /// `1/(k + 1)`).
+    /// `1/(k + 1)`); the chart is the state's.
     fn sample_independent(&self, scene: &Scene, g: usize, seed: u64, state: &mut CmltState) -> f64 {
         let k = g + 1;
         if k < self.settings.min_edges {
+            state.move_to(0, std::iter::empty());
             return 0.0;
         }
         let mut rng = stream(seed, 0);
-        let s = Self::bootstrap_chart(k, &mut rng);
+        let s = uniform_index(uniform(&mut rng), k + 1);
         let atlas = self.atlas(scene, k);
         let target = Self::target(&atlas);
         state.move_to(s, (0..atlas.dim(s)).map(|_| uniform(&mut rng)));
@@ -377,12 +378,6 @@ impl Cmlt {
         } else {
             0.0
         }
-    }
-
-    /// The chart of an independent sample of `k` edges: uniform in `0 … k`, the first number
-    /// of its stream.
-    fn bootstrap_chart(k: usize, rng: &mut ChainRng) -> usize {
-        uniform_index(uniform(rng), k + 1)
     }
 
     /// The technique charts of paths of `k` edges (`s = 0 … k`).
@@ -559,21 +554,24 @@ impl Method for Cmlt {
     }
 
     fn independent_weight(&self, scene: &Scene, g: usize, seed: u64) -> f64 {
+        self.independent_in_stratum(scene, g, seed).1
+    }
+
+    fn independent_in_stratum(&self, scene: &Scene, g: usize, seed: u64) -> (usize, f64) {
         thread_local! {
             // The state the bootstrap samples of a thread are evaluated in (its vectors reused).
             static STATE: std::cell::RefCell<CmltState> =
                 std::cell::RefCell::new(CmltState::in_chart(0, Vec::new()));
         }
-        STATE.with_borrow_mut(|state| self.sample_independent(scene, g, seed, state))
+        STATE.with_borrow_mut(|state| {
+            let w = self.sample_independent(scene, g, seed, state);
+            (state.chart, w)
+        })
     }
 
     /// The bootstrap picks a chart uniformly: its `k + 1` charts are the strata of length `k`.
     fn strata(&self, g: usize) -> usize {
         g + 2
-    }
-
-    fn bootstrap_stratum(&self, g: usize, seed: u64) -> usize {
-        Self::bootstrap_chart(g + 1, &mut stream(seed, 0))
     }
 
     /// The large step, whose candidate is uniform in the chain's chart: a bootstrap sample of

@@ -105,10 +105,11 @@ pub trait Method: Sync {
     fn strata(&self, _g: usize) -> usize {
         1
     }
-    /// The stratum [`Method::independent`]`(scene, g, seed)` falls in (of [`Method::strata`];
-    /// 0 by default).
-    fn bootstrap_stratum(&self, _g: usize, _seed: u64) -> usize {
-        0
+    /// The stratum [`Method::independent`]`(scene, g, seed)` falls in (of [`Method::strata`])
+    /// and its weight, as [`Method::independent_weight`] computes it; the driver asks for it
+    /// when group `g` has more than one stratum. By default stratum 0.
+    fn independent_in_stratum(&self, scene: &Scene, g: usize, seed: u64) -> (usize, f64) {
+        (0, self.independent_weight(scene, g, seed))
     }
     /// Whether the chains move between groups (path-space MLT's change path length), so that
     /// the groups matter to the bootstrap only: the chains' deposits (all in group 0,
@@ -353,13 +354,21 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     // 1. Bootstrap.
     let t = Instant::now();
     let n = groups * settings.bootstrap;
-    let mut weights: Vec<f64> = (0..n)
+    let strata: Vec<usize> = (0..groups).map(|g| method.strata(g).max(1)).collect();
+    let (sample_strata, mut weights): (Vec<usize>, Vec<f64>) = (0..n)
         .into_par_iter()
         .map(|j| {
             let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
-            method.independent_weight(scene, g, key(settings.seed, g, i))
+            if strata[g] > 1 {
+                method.independent_in_stratum(scene, g, key(settings.seed, g, i))
+            } else {
+                (
+                    0,
+                    method.independent_weight(scene, g, key(settings.seed, g, i)),
+                )
+            }
         })
-        .collect();
+        .unzip();
     for wgt in &mut weights {
         if !wgt.is_finite() || *wgt < 0.0 {
             *wgt = 0.0;
@@ -448,18 +457,11 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
         .independent_proposals()
         .filter(|_| settings.refine_normalisation);
     let spans = method.chains_span_groups();
-    let strata: Vec<usize> = (0..groups).map(|g| method.strata(g).max(1)).collect();
     let mut tally = tally_kind.map(|kind| {
         let mut t = NormalisationTally::new(kind, &strata);
-        for (j, &weight) in weights.iter().enumerate() {
-            let (group, i) = (j / settings.bootstrap, j % settings.bootstrap);
-            let stratum = if strata[group] > 1 {
-                method.bootstrap_stratum(group, key(settings.seed, group, i))
-            } else {
-                0
-            };
+        for (j, (&weight, &stratum)) in weights.iter().zip(&sample_strata).enumerate() {
             t.add(BootstrapSample {
-                group,
+                group: j / settings.bootstrap,
                 stratum,
                 weight,
             });

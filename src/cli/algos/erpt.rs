@@ -16,6 +16,7 @@ pub const ENTRY: Entry = Entry {
         settings.mutations = p.mutations(c, &a.metropolis, &p.erpt_mutations)?;
         settings.chain_length = p.erpt_chain_length;
         settings.chains_per_seed = p.erpt_chains;
+        settings.direct_apart = a.metropolis.direct_samples > 0;
         Ok(Box::new(Passes {
             sampler: c.pass_sampler(),
             estimator: Erpt::new(scene, settings)?,
