@@ -1,4 +1,5 @@
-//! Options of the Metropolis integrators (`--algo pssmlt|mmlt|mlt|memlt|cmlt`).
+//! Options of the Metropolis integrators (`--algo pssmlt|mmlt|mlt|memlt|cmlt`; ERPT and MEPT
+//! take the direct pass's).
 
 use super::CliError;
 use clap::{Args, ValueEnum};
@@ -6,7 +7,10 @@ use light_transport::metropolis::{
     DIRECT_EDGES, DirectApart, ImportanceKind, MetropolisSettings, SeparateDirect,
 };
 use light_transport::path::MisHeuristic;
-use light_transport::renderer::{Metropolis, Renderer};
+use light_transport::pathspace::{Erpt, ErptSettings};
+use light_transport::renderer::{Metropolis, Passes, Renderer};
+use light_transport::sampler::PixelSampler;
+use light_transport::scene::Scene;
 use mcmc_core::primary_sample::Kelemen;
 use mcmc_core::proposals::SmallStep;
 /// Small-step kernel.
@@ -128,6 +132,36 @@ impl MetropolisArgs {
             method,
             settings: self.settings(),
         }))
+    }
+
+    /// Energy redistribution path tracing (ERPT, or MEPT by its mutations) with `settings` as a
+    /// renderer of passes drawing their numbers by `sampler`, with its direct lighting rendered
+    /// apart as for the methods above (its seeds of at most two edges start no chains) unless
+    /// that is off or `settings` leaves the chains no longer paths.
+    pub fn erpt_renderer(
+        &self,
+        scene: &Scene,
+        mut settings: ErptSettings,
+        sampler: PixelSampler,
+        heuristic: MisHeuristic,
+    ) -> Result<Box<dyn Renderer>, CliError> {
+        let max_edges = settings.mutations.max_edges;
+        settings.direct_apart = self.direct_samples > 0 && max_edges > DIRECT_EDGES;
+        let passes = Passes {
+            sampler,
+            estimator: Erpt::new(scene, settings.clone())?,
+            details: Erpt::summary,
+        };
+        if !settings.direct_apart {
+            return Ok(Box::new(passes));
+        }
+        Ok(Box::new(SeparateDirect::around(
+            passes,
+            max_edges,
+            heuristic,
+            self.direct_samples,
+            self.direct_share,
+        )?))
     }
 
     /// Driver settings (the budget and seed come with each render).

@@ -120,6 +120,9 @@ pub struct PathSpaceArgs {
     /// ERPT: chains started per pixel sample on average (sets the energy quantum).
     #[arg(long, default_value_t = 1.0)]
     pub erpt_chains: f64,
+    /// ERPT: most chains one seed starts; a brighter seed's chains share its energy (README).
+    #[arg(long, default_value_t = 100)]
+    pub erpt_max_chains: u64,
 }
 
 impl PathSpaceArgs {

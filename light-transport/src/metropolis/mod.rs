@@ -24,5 +24,5 @@ pub use importance::ImportanceKind;
 pub use mmlt::Mmlt;
 pub use pssmlt::{PrimaryProposal, PrimaryState, PrimaryTarget, Pssmlt, mutate_primary};
 pub use record::{BootstrapSample, Contribution, ExpectedValue, Recordable, Recorder, Sink};
-pub use separate_direct::{DIRECT_EDGES, DirectApart, SeparateDirect};
+pub use separate_direct::{Chains, DIRECT_EDGES, DirectApart, SeparateDirect};
 pub use stream::PrimaryStream;

@@ -12,13 +12,19 @@
 //! and the chains' splats side by side ([`crate::film::Film::image`] adds them). The pass runs
 //! pass by pass between the chains' rounds, keeping pace with them, so that a render stopped early
 //! still holds an estimate of every path.
+//!
+//! The chains are any [`Chains`] renderer whose image leaves those paths out: a Metropolis
+//! method on the driver ([`SeparateDirect::new`]), or energy redistribution path tracing, whose
+//! passes of seeds and chains skip the short seeds ([`SeparateDirect::around`],
+//! [`crate::pathspace::ErptSettings::direct_apart`]).
 
 use super::driver::{Method, MetropolisSettings};
 use crate::budget::Budget;
 use crate::film::{Film, Image};
+use crate::integrators::Estimator;
 use crate::integrators::{DirectLighting, Sampling, pass};
 use crate::path::MisHeuristic;
-use crate::renderer::{Control, Metropolis, Progress, Renderer, Report};
+use crate::renderer::{Control, Metropolis, Passes, Progress, Renderer, Report};
 use crate::sampler::PixelSampler;
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -37,10 +43,31 @@ pub trait DirectApart: Method + Sized {
     fn max_edges(&self) -> usize;
 }
 
-/// A Metropolis method with direct lighting rendered apart (module docs).
-pub struct SeparateDirect<M> {
+/// A renderer of the paths longer than [`DIRECT_EDGES`] edges, run beside the direct pass.
+pub trait Chains: Renderer {
+    /// Correct `report`'s figures for the direct passes that ran between the chains' rounds for
+    /// `direct_time` in all (`pixels`: of the image). Nothing by default.
+    fn discount(&self, _report: &mut Report, _pixels: f64, _direct_time: Duration) {}
+}
+
+impl<M: Method> Chains for Metropolis<M> {
+    /// The chains' time and rates without the passes.
+    fn discount(&self, report: &mut Report, pixels: f64, direct_time: Duration) {
+        if let Some(stats) = report.metropolis.as_mut() {
+            stats.chain_time = stats.chain_time.saturating_sub(direct_time);
+            report.details = self.details(stats, pixels);
+        }
+    }
+}
+
+/// Energy redistribution path tracing's passes (their time includes the direct passes run
+/// between them; ERPT reports no rates of its own).
+impl<E: Estimator> Chains for Passes<E> {}
+
+/// A Metropolis method (or ERPT) with direct lighting rendered apart (module docs).
+pub struct SeparateDirect<R> {
     /// The chains, on paths of more than [`DIRECT_EDGES`] edges.
-    pub chains: Metropolis<M>,
+    pub chains: R,
     /// The direct pass.
     pub direct: DirectLighting,
     /// Samples per pixel of the direct pass under a samples-per-pixel budget (spread over the
@@ -51,7 +78,7 @@ pub struct SeparateDirect<M> {
     pub time_share: f64,
 }
 
-impl<M: DirectApart> SeparateDirect<M> {
+impl<M: DirectApart> SeparateDirect<Metropolis<M>> {
     /// `method` with its paths of at most [`DIRECT_EDGES`] edges rendered apart by the
     /// direct-lighting pass (MIS by `heuristic` between light and BSDF sampling): `samples_per_pixel` samples per pixel under a
     /// samples-per-pixel budget, `time_share` of a time budget. Errors if the method samples no
@@ -64,12 +91,31 @@ impl<M: DirectApart> SeparateDirect<M> {
         samples_per_pixel: usize,
         time_share: f64,
     ) -> Result<Self> {
-        if method.max_edges() <= DIRECT_EDGES {
+        let max_edges = method.max_edges();
+        let chains = Metropolis {
+            method: method.without_direct(),
+            settings,
+        };
+        SeparateDirect::around(chains, max_edges, heuristic, samples_per_pixel, time_share)
+    }
+}
+
+impl<R: Chains> SeparateDirect<R> {
+    /// `chains`, a renderer whose image already leaves out the paths of at most
+    /// [`DIRECT_EDGES`] edges (of paths up to `max_edges` edges), with those paths rendered by
+    /// the direct pass, as [`SeparateDirect::new`] does.
+    pub fn around(
+        chains: R,
+        max_edges: usize,
+        heuristic: MisHeuristic,
+        samples_per_pixel: usize,
+        time_share: f64,
+    ) -> Result<Self> {
+        if max_edges <= DIRECT_EDGES {
             return Err(Error::InvalidParameter {
                 name: "direct pass".into(),
                 reason: format!(
-                    "a direct pass needs paths longer than {DIRECT_EDGES} edges for the chains (the maximum is {})",
-                    method.max_edges()
+                    "a direct pass needs paths longer than {DIRECT_EDGES} edges for the chains (the maximum is {max_edges})"
                 ),
             });
         }
@@ -82,10 +128,7 @@ impl<M: DirectApart> SeparateDirect<M> {
             });
         }
         Ok(Self {
-            chains: Metropolis {
-                method: method.without_direct(),
-                settings,
-            },
+            chains,
             direct: DirectLighting { heuristic },
             samples_per_pixel,
             time_share,
@@ -139,7 +182,7 @@ impl DirectSoFar {
     }
 }
 
-impl<M: Method> Renderer for SeparateDirect<M> {
+impl<R: Chains> Renderer for SeparateDirect<R> {
     /// The direct pass keeps pace with the chains: one pass first, then after every round of the
     /// chains as many passes as keep it at its share (of the samples per pixel the budget asks
     /// for, or of the time so far), the rest at the end under a samples-per-pixel budget. So a
@@ -253,12 +296,11 @@ impl<M: Method> Renderer for SeparateDirect<M> {
             other => other?,
         };
         // The chains' time and rates without the passes run between their rounds.
-        if let Some(stats) = report.metropolis.as_mut() {
-            stats.chain_time = stats
-                .chain_time
-                .saturating_sub(direct.time.saturating_sub(before_chains));
-            report.details = self.chains.details(stats, (width * height) as f64);
-        }
+        self.chains.discount(
+            &mut report,
+            (width * height) as f64,
+            direct.time.saturating_sub(before_chains),
+        );
         if let Budget::SamplesPerPixel(_) = budget {
             while direct.passes < planned && !stopped() {
                 direct.pass(scene, &self.direct, seed);

@@ -12,18 +12,25 @@
 //! mutations' mixing. `e_d` is set from a deterministic pilot so that a pixel starts
 //! `chains_per_seed` chains on average.
 //!
-//! **Direct lighting without chains** ([`ErptSettings::direct_apart`], on by default): a seed
-//! of at most [`DIRECT_EDGES`] edges (an emitter seen directly, direct illumination) deposits its
-//! path-tracing estimate `e(x̄) · f/I(f)` itself — the expected value of what its chains would
-//! deposit — and starts none. The chains sample the longer paths only (their target is 0 on
-//! the short ones, [`Mutations::min_edges`]). `e_d` stays what it was (the mean energy of all
-//! seeds), so a pixel sample starts fewer chains, none on direct light, and costs less. (An
-//! `e_d` from the chains' seeds alone, to keep `chains_per_seed` chains per pixel sample, rests
-//! on a pilot that rarely sees the bright indirect paths of scenes lit mostly directly: on
+//! **At most [`ErptSettings::max_chains`] chains per seed.** A seed whose energy is `r = e/e_d ≫
+//! 1` quanta (a rare bright path: a caustic found by path tracing) would start `r` chains, and
+//! one such seed could hold a pass for minutes. Above the cap, a seed starts `max_chains` chains
+//! that each carry `e / max_chains` instead of `e_d` (deposits `e / (max_chains N)` per step).
+//! The decision depends on `r` alone, so each seed still deposits `e` in expectation, from
+//! chains that start at the seed: the argument above holds unchanged.
+//!
+//! **Direct lighting apart** ([`ErptSettings::direct_apart`]; off here, on in the command line):
+//! seeds of at most [`DIRECT_EDGES`] edges (an emitter seen directly, direct illumination) start
+//! no chains and deposit nothing, the chains sample longer paths only (their target is 0 on the
+//! short ones, [`Mutations::min_edges`]), and the image lacks those paths: a direct-lighting pass
+//! renders them beside the passes of seeds ([`crate::metropolis::SeparateDirect::around`]), as
+//! for the other Metropolis methods. `e_d` stays the mean energy of all seeds, so a pixel sample
+//! starts fewer chains and costs less. (Two other versions were measured and dropped: the short
+//! seeds depositing their own path-traced estimate instead of chains — one sample per pixel per
+//! pass, so at 10 s its direct light had 4× the RMSE on `cornell` and 2× on `door` of the chains
+//! that redistribute it over their neighbourhoods; and `e_d` from the chains' seeds alone, which
+//! rests on a pilot that rarely sees the bright indirect paths of scenes lit mostly directly: on
 //! `ring`, whose caustic is such a path, it started 25 chains per pixel sample instead of 1.)
-//! The path tracer's estimate with multiple importance sampling is what the direct-lighting
-//! pass of the other Metropolis methods computes ([`crate::metropolis::SeparateDirect`]); here
-//! it comes with every seed at no extra cost.
 
 use super::mutations::{MutationProbabilities, Mutations};
 use super::new_path::NewPath;
@@ -52,9 +59,11 @@ pub struct ErptSettings {
     pub chains_per_seed: f64,
     /// Pixel samples of the pilot that estimates the mean seed energy (default 4096).
     pub pilot: usize,
-    /// Seeds of at most [`DIRECT_EDGES`] edges deposit their path-tracing estimate instead of
-    /// starting chains (default true; see the module comment).
+    /// Seeds of at most [`DIRECT_EDGES`] edges start no chains and deposit nothing: a direct
+    /// pass renders those paths (default false; see the module comment).
     pub direct_apart: bool,
+    /// Most chains one seed starts (default 100; see the module comment).
+    pub max_chains: u64,
 }
 
 impl ErptSettings {
@@ -68,7 +77,8 @@ impl ErptSettings {
             chain_length: 100,
             chains_per_seed: 1.0,
             pilot: 4096,
-            direct_apart: true,
+            direct_apart: false,
+            max_chains: 100,
         }
     }
 
@@ -90,7 +100,8 @@ pub struct Erpt {
     pub settings: ErptSettings,
     /// The energy quantum `e_d`.
     pub quantum: f64,
-    stats: Mutex<(Stats, u64)>,
+    /// Acceptance per kind, chains run, seeds whose chains were capped.
+    stats: Mutex<(Stats, u64, u64)>,
     walks: Mutex<crate::manifold::WalkStats>,
 }
 
@@ -129,10 +140,10 @@ impl Erpt {
             }
         }
         let m = &settings.mutations;
-        if settings.chain_length == 0 || settings.pilot == 0 {
+        if settings.chain_length == 0 || settings.pilot == 0 || settings.max_chains == 0 {
             return Err(Error::InvalidParameter {
                 name: "erpt".into(),
-                reason: "need max depth ≥ 1, chain length ≥ 1 and pilot ≥ 1".into(),
+                reason: "need max depth ≥ 1, chain length ≥ 1, pilot ≥ 1 and at least one chain per seed".into(),
             });
         }
         if !(settings.chains_per_seed > 0.0 && settings.chains_per_seed.is_finite()) {
@@ -161,7 +172,7 @@ impl Erpt {
         Ok(Self {
             quantum: mean / settings.chains_per_seed,
             settings,
-            stats: Mutex::new((Stats::default(), 0)),
+            stats: Mutex::new((Stats::default(), 0, 0)),
             walks: Mutex::new(Default::default()),
         })
     }
@@ -170,12 +181,21 @@ impl Erpt {
     /// (`pixels`: of the image).
     pub fn summary(&self, pixels: f64) -> Vec<String> {
         let (stats, chains) = self.statistics();
+        let capped = self.capped_seeds();
         let mut out = vec![format!(
-            "erpt       energy quantum e_d = {:.4e}, {} chains of {} mutations ({:.2} chains per pixel)",
+            "erpt       energy quantum e_d = {:.4e}, {} chains of {} mutations ({:.2} chains per pixel){}",
             self.quantum,
             chains,
             self.settings.chain_length,
-            chains as f64 / pixels
+            chains as f64 / pixels,
+            if capped > 0 {
+                format!(
+                    "; {capped} seeds of more than {} quanta started {} chains each",
+                    self.settings.max_chains, self.settings.max_chains
+                )
+            } else {
+                String::new()
+            }
         )];
         out.extend(
             stats
@@ -204,10 +224,13 @@ impl Erpt {
 
     /// Acceptance per mutation kind and the number of chains run so far.
     pub fn statistics(&self) -> (Stats, u64) {
-        match self.stats.lock() {
-            Ok(g) => g.clone(),
-            Err(e) => e.into_inner().clone(),
-        }
+        let g = self.stats.lock().unwrap_or_else(|e| e.into_inner());
+        (g.0.clone(), g.1)
+    }
+
+    /// Seeds so far whose energy exceeded [`ErptSettings::max_chains`] quanta.
+    pub fn capped_seeds(&self) -> u64 {
+        self.stats.lock().unwrap_or_else(|e| e.into_inner()).2
     }
 }
 
@@ -275,7 +298,8 @@ impl Estimator for Erpt {
             return Rgb::BLACK;
         };
         let mut stats = Stats::default();
-        let mut chains = 0;
+        let (mut chains, mut capped) = (0, 0);
+        let max = self.settings.max_chains;
         let mut rec = ExpectedValue {
             recorder: splats,
             b: self.quantum / n as f64,
@@ -284,12 +308,18 @@ impl Estimator for Erpt {
         };
         for (state, e) in seeds {
             if state.path.edges() < m.min_edges {
-                // Direct lighting apart: the seed's own estimate, what its chains would deposit
-                // in expectation (`e` times `f / I(f)`).
-                rec.record(&state, e / rec.b);
-                continue;
+                continue; // the direct pass's path
             }
-            let count = (e / self.quantum + uniform(stream.rng())).floor() as u64;
+            let quanta = e / self.quantum;
+            let count = if quanta > max as f64 {
+                // Capped: `max` chains carry the seed's energy between them.
+                capped += 1;
+                rec.b = e / (max * n) as f64;
+                max
+            } else {
+                rec.b = self.quantum / n as f64;
+                (quanta + uniform(stream.rng())).floor() as u64
+            };
             for _ in 0..count {
                 let Ok(mut chain) = Chain::with_density(state.clone(), 0.0) else {
                     continue;
@@ -304,6 +334,7 @@ impl Estimator for Erpt {
         {
             g.0.merge(&stats);
             g.1 += chains;
+            g.2 += capped;
         }
         Rgb::BLACK
     }

@@ -1,8 +1,7 @@
 //! Energy redistribution path tracing.
 
 use crate::cli::registry::Entry;
-use light_transport::pathspace::{Erpt, ErptSettings};
-use light_transport::renderer::Passes;
+use light_transport::pathspace::ErptSettings;
 
 /// ERPT (Cline, Talbot & Egbert 2005).
 pub const ENTRY: Entry = Entry {
@@ -16,11 +15,8 @@ pub const ENTRY: Entry = Entry {
         settings.mutations = p.mutations(c, &a.metropolis, &p.erpt_mutations)?;
         settings.chain_length = p.erpt_chain_length;
         settings.chains_per_seed = p.erpt_chains;
-        settings.direct_apart = a.metropolis.direct_samples > 0;
-        Ok(Box::new(Passes {
-            sampler: c.pass_sampler(),
-            estimator: Erpt::new(scene, settings)?,
-            details: Erpt::summary,
-        }))
+        settings.max_chains = p.erpt_max_chains;
+        a.metropolis
+            .erpt_renderer(scene, settings, c.pass_sampler(), c.heuristic)
     },
 };

@@ -1,8 +1,7 @@
 //! Manifold exploration path tracing.
 
 use crate::cli::registry::Entry;
-use light_transport::pathspace::{Erpt, ErptSettings};
-use light_transport::renderer::Passes;
+use light_transport::pathspace::ErptSettings;
 
 /// MEPT (Jakob & Marschner 2012): energy redistribution path tracing with the manifold
 /// perturbation in place of its perturbations.
@@ -17,11 +16,8 @@ pub const ENTRY: Entry = Entry {
         settings.mutations = p.mutations(c, &a.metropolis, &p.mept_mutations)?;
         settings.chain_length = p.erpt_chain_length;
         settings.chains_per_seed = p.erpt_chains;
-        settings.direct_apart = a.metropolis.direct_samples > 0;
-        Ok(Box::new(Passes {
-            sampler: c.pass_sampler(),
-            estimator: Erpt::new(scene, settings)?,
-            details: Erpt::summary,
-        }))
+        settings.max_chains = p.erpt_max_chains;
+        a.metropolis
+            .erpt_renderer(scene, settings, c.pass_sampler(), c.heuristic)
     },
 };
