@@ -83,7 +83,7 @@ fn every_subcommand_runs_on_a_tiny_image() {
         ("pssmlt", "large_step"),
         ("mmlt", "small_step"),
         ("mlt", "multi-chain"),
-        ("erpt", "caustic"),
+        ("erpt", "lens"),
         ("cmlt", "chart swap"),
     ] {
         let (ok, out, e) = run(charted().args([
