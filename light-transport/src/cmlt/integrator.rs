@@ -74,7 +74,7 @@ impl Recordable for CmltState {
     }
 
     /// A large step's candidate: coordinates uniform in the chain's chart `s`, so a sample of
-    /// the bootstrap's stratum `s` ([`Cmlt::sample_independent`]), of bootstrap weight
+    /// the bootstrap's stratum `s` (`Cmlt::sample_independent`), of bootstrap weight
     /// `(k + 1) π_s(u)` (0 where the chart's map failed).
     fn independent_weight(&self) -> BootstrapSample {
         let k = self.x.path.edges();
