@@ -653,21 +653,7 @@ fn pssmlt_and_mmlt_converge_to_bdpt_on_every_builtin_scene() {
 
 /// `runs` renders of `renderer` with 32 mutations per pixel, seeds 77, 78, …, as 6×6 blocks.
 fn renderer_runs(scene: &Scene, renderer: &dyn Renderer, runs: u64) -> Vec<Vec<f64>> {
-    (0..runs)
-        .map(|r| {
-            let mut go_on = |_: &Film, _: &Progress| true;
-            let mut control = Control {
-                progress: &mut go_on,
-                stop: None,
-            };
-            let (film, report) = renderer
-                .render(scene, Budget::SamplesPerPixel(32.0), 77 + r, &mut control)
-                .unwrap();
-            assert_eq!(film.discarded, 0);
-            assert!(!report.interrupted);
-            blocks(&Image::from_film(&film))
-        })
-        .collect()
+    common::renderer_runs(scene, renderer, Budget::SamplesPerPixel(32.0), 77, runs)
 }
 
 /// A broken `renderer` (`what`) disagrees with BDPT on cornell (8 runs as in [`renderer_runs`]).

@@ -26,7 +26,7 @@ use common::{
     settings,
 };
 use light_transport::Budget;
-use light_transport::film::{Film, Image};
+use light_transport::film::Image;
 use light_transport::integrators::{Estimator, Splat, render};
 use light_transport::metropolis::{
     self, DIRECT_EDGES, ExpectedValue, ImportanceKind, Method, MetropolisSettings, Seeding,
@@ -37,7 +37,7 @@ use light_transport::pathspace::erpt::seed_paths;
 use light_transport::pathspace::{
     Erpt, ErptSettings, MutationProbabilities, Mutations, NewPath, PathMlt, PathState,
 };
-use light_transport::renderer::{Control, Passes, Progress, Renderer};
+use light_transport::renderer::{Passes, Renderer};
 use light_transport::sampler::PixelStream;
 use light_transport::scene::{Scene, builtin};
 use light_transport::spectrum::Rgb;
@@ -448,20 +448,7 @@ fn erpt_with_capped_chains_converges_to_bdpt() {
 
 /// ERPT renders of `renderer` as 6×6 blocks: 8 runs of `spp` passes, seeds as [`erpt_runs`].
 fn erpt_renderer_runs(scene: &Scene, renderer: &dyn Renderer, spp: f64) -> Vec<Vec<f64>> {
-    (0..8)
-        .map(|r| {
-            let mut go_on = |_: &Film, _: &Progress| true;
-            let mut control = Control {
-                progress: &mut go_on,
-                stop: None,
-            };
-            let (film, _) = renderer
-                .render(scene, Budget::SamplesPerPixel(spp), 700 + r, &mut control)
-                .unwrap();
-            assert_eq!(film.discarded, 0);
-            blocks(&Image::from_film(&film))
-        })
-        .collect()
+    common::renderer_runs(scene, renderer, Budget::SamplesPerPixel(spp), 700, 8)
 }
 
 /// ERPT whose seeds of at most two edges start no chains, beside the direct-lighting pass (4

@@ -355,20 +355,26 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let t = Instant::now();
     let n = groups * settings.bootstrap;
     let strata: Vec<usize> = (0..groups).map(|g| method.strata(g).max(1)).collect();
-    let (sample_strata, mut weights): (Vec<usize>, Vec<f64>) = (0..n)
-        .into_par_iter()
-        .map(|j| {
-            let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
-            if strata[g] > 1 {
+    // Each sample's stratum is kept only for a method with strata (a vector as long as the
+    // bootstrap's otherwise).
+    let (sample_strata, mut weights): (Vec<usize>, Vec<f64>) = if strata.iter().any(|&n| n > 1) {
+        (0..n)
+            .into_par_iter()
+            .map(|j| {
+                let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
                 method.independent_in_stratum(scene, g, key(settings.seed, g, i))
-            } else {
-                (
-                    0,
-                    method.independent_weight(scene, g, key(settings.seed, g, i)),
-                )
-            }
-        })
-        .unzip();
+            })
+            .unzip()
+    } else {
+        let w = (0..n)
+            .into_par_iter()
+            .map(|j| {
+                let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
+                method.independent_weight(scene, g, key(settings.seed, g, i))
+            })
+            .collect();
+        (Vec::new(), w)
+    };
     for wgt in &mut weights {
         if !wgt.is_finite() || *wgt < 0.0 {
             *wgt = 0.0;
@@ -459,10 +465,10 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let spans = method.chains_span_groups();
     let mut tally = tally_kind.map(|kind| {
         let mut t = NormalisationTally::new(kind, &strata);
-        for (j, (&weight, &stratum)) in weights.iter().zip(&sample_strata).enumerate() {
+        for (j, &weight) in weights.iter().enumerate() {
             t.add(BootstrapSample {
                 group: j / settings.bootstrap,
-                stratum,
+                stratum: sample_strata.get(j).copied().unwrap_or(0),
                 weight,
             });
         }

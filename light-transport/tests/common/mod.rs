@@ -8,6 +8,7 @@ use light_transport::film::{Film, Image};
 use light_transport::integrators::{Bdpt, render};
 use light_transport::metropolis::{self, Method, MetropolisSettings, MetropolisStats, Seeding};
 use light_transport::path::{MisHeuristic, WalkSettings};
+use light_transport::renderer::{Control, Progress, Renderer};
 use light_transport::scene::Scene;
 use mcmc_core::Stats;
 use mcmc_core::balance::holm;
@@ -119,6 +120,32 @@ pub fn metropolis_runs<M: Method>(
                 ..settings
             };
             metropolis::run(scene, m, &s, |_, _, _| true).unwrap()
+        })
+        .collect()
+}
+
+/// `runs` renders of `renderer` within `budget`, seeds `seed`, `seed + 1`, …, as 6×6 blocks;
+/// each must discard nothing and run to its end.
+pub fn renderer_runs(
+    scene: &Scene,
+    renderer: &dyn Renderer,
+    budget: Budget,
+    seed: u64,
+    runs: u64,
+) -> Vec<Vec<f64>> {
+    (0..runs)
+        .map(|r| {
+            let mut go_on = |_: &Film, _: &Progress| true;
+            let mut control = Control {
+                progress: &mut go_on,
+                stop: None,
+            };
+            let (film, report) = renderer
+                .render(scene, budget, seed + r, &mut control)
+                .unwrap();
+            assert_eq!(film.discarded, 0);
+            assert!(!report.interrupted);
+            blocks(&Image::from_film(&film))
         })
         .collect()
 }
