@@ -16,14 +16,11 @@ shift $(( $# < 5 ? $# : 5 ))
 [[ ${1:-} == -- ]] && shift
 extra=("$@")
 root=$(cd "$(dirname "$0")/.." && pwd)
-old=${OLD_DIR:-"$root/../charted-$rev"}
 res=${RESOLUTION:-256x256}
 reftime=${REFTIME:-480}
 cd "$root"
 [[ -z ${NEW_BIN:-} ]] && cargo build --release --quiet
-if [[ ! -d $old ]]; then git worktree add --detach "$old" "$rev"; fi
-(cd "$old" && cargo build --release --quiet)
-new_bin=${NEW_BIN:-"$root/target/release/charted"} old_bin="$old/target/release/charted"
+new_bin=${NEW_BIN:-"$root/target/release/charted"} old_bin=$(scripts/build-rev.sh "$rev")
 mkdir -p out/ref out/builds
 for scene in $scenes; do
   ref="out/ref/$scene.exr"

@@ -10,8 +10,8 @@
 #
 # Defaults: SCENES = veach-bidir (../shared/scenes) and the built-ins cornell caustic door ring
 # pool; ALGOS = pt bdpt pssmlt mmlt mlt cmlt memlt mept; ROUNDS = 3; RESOLUTION = 512x288;
-# MAX_DEPTH = 7; SPP = 4 (PT: 4× that). REV is built in a git worktree (../charted-REV, or
-# OLD_DIR); NEW_BIN and OLD_BIN name binaries to use instead of building them.
+# MAX_DEPTH = 7; SPP = 4 (PT: 4× that). REV is built in a git worktree (scripts/build-rev.sh:
+# ../charted-REV, or OLD_DIR); NEW_BIN and OLD_BIN name binaries to use instead of building them.
 # Prints, per scene and algorithm, the median render time of each build, the speed-up
 # (old time / new time, > 1 is faster) and the peak resident memory of each build; a final line
 # gives the geometric mean of the speed-ups.
@@ -22,14 +22,9 @@ scenes=${2:-"$root/../shared/scenes/veach-bidir/scene.pbrt cornell caustic door 
 algos=${3:-"pt bdpt pssmlt mmlt mlt cmlt memlt mept"}
 rounds=${4:-3}
 res=${RESOLUTION:-512x288} depth=${MAX_DEPTH:-7} spp=${SPP:-4}
-old=${OLD_DIR:-"$root/../charted-$rev"}
 cd "$root"
 [[ -z ${NEW_BIN:-} ]] && cargo build --release --quiet
-if [[ -z ${OLD_BIN:-} ]]; then
-  if [[ ! -d $old ]]; then git worktree add --detach "$old" "$rev"; fi
-  (cd "$old" && cargo build --release --quiet)
-fi
-new_bin=${NEW_BIN:-"$root/target/release/charted"} old_bin=${OLD_BIN:-"$old/target/release/charted"}
+new_bin=${NEW_BIN:-"$root/target/release/charted"} old_bin=${OLD_BIN:-$(scripts/build-rev.sh "$rev")}
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 

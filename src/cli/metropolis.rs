@@ -44,12 +44,11 @@ pub struct MetropolisArgs {
     /// false: expected values alone.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     pub large_step_mis: bool,
-    /// PSSMLT, MMLT, MLT, MEMLT and CMLT: samples per pixel (with --spp) of a pass that renders
-    /// the paths of at most two edges apart from the chains (emitters seen directly or in a
-    /// mirror, direct illumination; Mitsuba 0.6's separateDirect; README). The chains then sample
-    /// longer paths only. 0: no such pass, chains on every path (also when --max-depth leaves no
-    /// longer paths). ERPT and MEPT: any value but 0 has their seeds of at most two edges deposit
-    /// their own path-traced estimate instead of starting chains (one per pixel sample).
+    /// PSSMLT, MMLT, MLT, MEMLT, CMLT, ERPT and MEPT: samples per pixel (with --spp) of a pass
+    /// that renders the paths of at most two edges apart from the chains (emitters seen directly
+    /// or in a mirror, direct illumination; Mitsuba 0.6's separateDirect; README). The chains then
+    /// sample longer paths only (ERPT's and MEPT's seeds of at most two edges start no chains).
+    /// 0: no such pass, chains on every path (also when --max-depth leaves no longer paths).
     #[arg(long, default_value_t = 16)]
     pub direct_samples: usize,
     /// The share of the wall time (bootstrap included) the direct-lighting pass runs for under
