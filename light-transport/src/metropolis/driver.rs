@@ -355,25 +355,19 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let t = Instant::now();
     let n = groups * settings.bootstrap;
     let strata: Vec<usize> = (0..groups).map(|g| method.strata(g).max(1)).collect();
+    let sample = |j: usize| {
+        let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
+        method.independent_in_stratum(scene, g, key(settings.seed, g, i))
+    };
     // Each sample's stratum is kept only for a method with strata (a vector as long as the
     // bootstrap's otherwise).
     let (sample_strata, mut weights): (Vec<usize>, Vec<f64>) = if strata.iter().any(|&n| n > 1) {
-        (0..n)
-            .into_par_iter()
-            .map(|j| {
-                let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
-                method.independent_in_stratum(scene, g, key(settings.seed, g, i))
-            })
-            .unzip()
+        (0..n).into_par_iter().map(sample).unzip()
     } else {
-        let w = (0..n)
-            .into_par_iter()
-            .map(|j| {
-                let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
-                method.independent_weight(scene, g, key(settings.seed, g, i))
-            })
-            .collect();
-        (Vec::new(), w)
+        (
+            Vec::new(),
+            (0..n).into_par_iter().map(|j| sample(j).1).collect(),
+        )
     };
     for wgt in &mut weights {
         if !wgt.is_finite() || *wgt < 0.0 {
