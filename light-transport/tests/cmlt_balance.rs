@@ -10,12 +10,18 @@
 //! `M` is twice the largest value seen in a pilot of 200 000 draws — and every value met during
 //! the tests is checked against it (a violation fails the test, it would make the draws inexact).
 //!
-//! Checks (seeded; α = 1e-4 each, Bonferroni within a check, so a false failure of the correct
-//! kernel has probability ≤ 4e-4 for the file): invariance of (chart, raster position, floor
-//! point) after 3 steps from exact draws, and exchangeability of one step on (raster cell ×
-//! chart). Tests of the tests: a chart swap that forgets its proposal ratio `q(s)/q(s')` (with a
-//! skewed swap proposal) and an IPSM that forgets the density ratio `p_j(x̄)/p_j(ȳ)` are caught by
-//! the invariance check.
+//! Checks (seeded; α = 1e-4 each, Bonferroni within a check, so a false failure of the eight
+//! checks of correct kernels has probability ≤ 8e-4 for the file): invariance of (chart, raster
+//! position, floor point) after 3 steps from exact draws, and exchangeability of one step on
+//! (raster cell × chart). Tests of the tests: a chart swap that forgets its proposal ratio
+//! `q(s)/q(s')` (with a skewed swap proposal) and an IPSM that forgets the density ratio
+//! `p_j(x̄)/p_j(ȳ)` are caught by the invariance check.
+//!
+//! The chart-keeping moves of replica exchange are checked on the built-in caustic instead, in
+//! single charts of paths of four edges (exact draws of one chart's law by rejection, with a bound
+//! of eight times a pilot's largest value): the glass sphere makes the charts' weights differ
+//! most there. A chart-keeping IPSM that accepts for the paths' law instead of the chart's is
+//! caught.
 
 use light_transport::Rgb;
 use light_transport::cmlt::{
@@ -574,4 +580,187 @@ fn the_merge_probability_approximation_shrinks_with_the_radius() {
     let edge = &errors[1];
     assert!(edge[1].0 > 0.5, "{edge:?}");
     assert!(edge[3].0.abs() < edge[3].1.max(0.005), "{edge:?}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Chart-keeping moves on a caustic (replica exchange: every chain keeps its chart).
+
+/// The built-in caustic at 36×30 (a glass sphere focusing a small light onto the floor).
+fn caustic() -> &'static Scene {
+    static S: OnceLock<Scene> = OnceLock::new();
+    S.get_or_init(|| {
+        Scene::new(
+            &light_transport::scene::builtin::builtin("caustic").expect("built-in"),
+            Some((36, 30)),
+        )
+        .expect("scene")
+    })
+}
+
+/// Path length of the caustic checks: chart `s = 4` (light tracing, `t = 1`) holds the caustic
+/// `L S S D E` beside diffuse paths.
+const CAUSTIC_K: usize = 4;
+
+/// Eight times the largest `π_s(u)` of a pilot of 400 000 uniform draws in chart `chart` (every
+/// value met later is checked against it by [`exact_draw_in`]).
+fn chart_bound(joint: &TechniqueJoint<'_>, chart: usize) -> f64 {
+    let mut rng = stream(0xB1, chart as u64);
+    let dim = joint.target.atlas.dim(chart);
+    let mut top: f64 = 0.0;
+    for _ in 0..400_000 {
+        let mut state = CmltState::in_chart(chart, (0..dim).map(|_| uniform(&mut rng)).collect());
+        let l = joint.evaluate(&mut state);
+        if l.is_finite() {
+            top = top.max(l.exp());
+        }
+    }
+    assert!(top > 0.0, "no light in the pilot of chart {chart}");
+    8.0 * top
+}
+
+/// Raster block (6×5 of the 36×30 image) and number of specular vertices, both categorical; the
+/// first camera number and the first light-position number of the chart's coordinates; the
+/// chart's balance weight `ln w_s = ln p_s − ln Σ p` at the path.
+fn caustic_features(s: &CmltState) -> Vec<f64> {
+    let r = s.x.path.raster(caustic()).unwrap_or([f64::NAN; 2]);
+    let block = (r[1] / 6.0).floor().clamp(0.0, 4.0) * 6.0 + (r[0] / 6.0).floor().clamp(0.0, 5.0);
+    let specular = s.x.path.vertices.iter().filter(|v| v.delta).count() as f64;
+    let t = CAUSTIC_K + 1 - s.chart;
+    let light =
+        light_transport::cmlt::camera_numbers(t) + light_transport::sampler::layout::LIGHT_POSITION;
+    let ln_w = s.ln_p[s.chart] - mcmc_core::proposals::log_sum_exp(&s.ln_p);
+    vec![
+        block,
+        specular,
+        s.u[0],
+        s.u.get(light).copied().unwrap_or(f64::NAN),
+        ln_w,
+    ]
+}
+
+/// The moves a chain of replica-exchange CMLT makes in its chart — small and large steps, IPSM
+/// through any chart and path-space mutations, the last two keeping the chart
+/// ([`Refresh::KeepChart`]) — keep that chart's conditional law `π̄_s` on the caustic: chart 4,
+/// the caustic's own technique, and chart 1 (next-event estimation). From exact draws of the
+/// chart, 4 steps; invariance of raster block, number of specular vertices and two coordinates
+/// (α = 1e-4 each). A chart-keeping IPSM that forgets `p_j(x̄)/p_j(ȳ)` is caught.
+#[test]
+fn chart_keeping_moves_keep_each_charts_law_on_a_caustic() {
+    let scene = caustic();
+    let m = Cmlt::new(
+        scene,
+        CmltSettings {
+            max_edges: CAUSTIC_K,
+            swaps: light_transport::cmlt::SwapKind::ReplicaExchange,
+            ipsm: 0.3,
+            pathspace: 0.3,
+            pilot: 500,
+            ..Default::default()
+        },
+    )
+    .expect("settings");
+    let atlas = m.atlas(scene, CAUSTIC_K);
+    let target = Cmlt::target(&atlas);
+    let joint = Joint::new(&target);
+    let check = |kernel: &mut dyn FnMut(&mut CmltState, &mut ChainRng), chart: usize, seed: u64| {
+        let bound = chart_bound(&joint, chart);
+        invariance(
+            |rng: &mut ChainRng| exact_draw_in(&joint, bound, Some(chart), rng),
+            |s: &mut CmltState, rng: &mut ChainRng| kernel(s, rng),
+            caustic_features,
+            &InvarianceConfig {
+                replicates: 4000,
+                steps: 1,
+                alpha: ALPHA,
+                categorical: vec![0, 1],
+            },
+            &mut stream(seed, 0),
+        )
+        .expect("check runs")
+    };
+    for (chart, seed) in [(4, 41), (1, 42)] {
+        let mut kernel = m.kernel(scene, &target, &joint, CAUSTIC_K).expect("kernel");
+        let mut stats = mcmc_core::Stats::default();
+        let r = check(
+            &mut |s, rng| steps(&joint, &mut kernel, s, rng, 4, &mut stats),
+            chart,
+            seed,
+        );
+        println!("chart {chart}: {r}");
+        print!("{}", stats.table(&m.kinds()));
+        assert!(r.passed, "chart {chart}: {r}");
+        // IPSM and the path-space moves were accepted often enough to matter.
+        for kind in ["ipsm", "path: "] {
+            let accepted: u64 = m
+                .kinds()
+                .iter()
+                .zip(&stats.kinds)
+                .filter(|(name, _)| name.starts_with(kind))
+                .map(|(_, k)| k.accepted)
+                .sum();
+            assert!(
+                accepted > 500,
+                "chart {chart}: {kind} accepted {accepted} times"
+            );
+        }
+    }
+    // IPSM through chart 4 with a large step (so that the chain equilibrates within the 64 steps
+    // checked) keeps chart 4's law; accepted as if the chain sampled the paths' law `f` (the
+    // Gibbs rule's acceptance), with the factor `w_s(ȳ)/w_s(x̄)` of the chart's balance weight
+    // forgotten, it is caught.
+    let ipsm = InversePerturbation::new(&target, 4, Independence::new(UniformCube))
+        .with_refresh(Refresh::KeepChart);
+    let mut correct = MetropolisHastings::new(&joint, &ipsm);
+    let r = check(
+        &mut |s, rng| {
+            steps(
+                &joint,
+                &mut correct,
+                s,
+                rng,
+                64,
+                &mut mcmc_core::Stats::default(),
+            )
+        },
+        4,
+        43,
+    );
+    println!("chart-keeping IPSM with large steps: {r}");
+    assert!(r.passed, "{r}");
+    let broken = WithoutChartWeight(&ipsm);
+    let mut kernel = MetropolisHastings::new(&joint, &broken);
+    let r = check(
+        &mut |s, rng| {
+            steps(
+                &joint,
+                &mut kernel,
+                s,
+                rng,
+                64,
+                &mut mcmc_core::Stats::default(),
+            )
+        },
+        4,
+        44,
+    );
+    println!("chart-keeping IPSM without the chart's weight: {r}");
+    assert!(
+        !r.passed,
+        "the broken chart-keeping IPSM was not caught: {r}"
+    );
+}
+
+/// A chart-keeping move whose ratio has `ln w_s(ȳ) − ln w_s(x̄)` taken back out (`w_s = p_s / Σ p`,
+/// the chain's chart `s`): it accepts for the path marginal `f` instead of the chart's `f w_s`.
+struct WithoutChartWeight<'a, P>(&'a P);
+
+impl<P: Proposal<CmltState>> Proposal<CmltState> for WithoutChartWeight<'_, P> {
+    fn propose(&self, x: &CmltState, y: &mut CmltState, rng: &mut ChainRng) -> Proposed {
+        let p = self.0.propose(x, y, rng);
+        if p.failure.is_some() || !p.ln_ratio.is_finite() {
+            return p;
+        }
+        let ln_w = |s: &CmltState| s.ln_p[s.chart] - mcmc_core::proposals::log_sum_exp(&s.ln_p);
+        Proposed::new(p.ln_ratio - (ln_w(y) - ln_w(x)), p.kind)
+    }
 }

@@ -322,8 +322,8 @@ fn caustic() -> SceneDescription {
     // A small bright light up and to the side: the sphere focuses it onto the floor.
     s.quad(
         DVec3::new(-1.5, 3.0, -1.2),
-        DVec3::Z * 0.3,
         DVec3::X * 0.3,
+        DVec3::Z * 0.3,
         black,
         Some(Rgb::splat(400.0)),
     );
