@@ -3,7 +3,7 @@
 # machine (the only kind of speed claim this project makes: absolute times drift by ±15% here).
 #
 #   scripts/compare-builds.sh REV "SCENES" ALGOS SECONDS [ROUNDS] [-- extra compare options]
-#   scripts/compare-builds.sh 3d5fea6 "cornell caustic door ring" mlt,cmlt 60 1
+#   scripts/compare-builds.sh 3d5fea6 "cornell examples/scenes/caustic.pbrt door ring" mlt,cmlt 60 1
 #
 # Builds REV in a git worktree (../charted-REV, or OLD_DIR), renders a BDPT reference per scene with this
 # build (REFTIME seconds, default 480, kept in out/ref/), then runs `charted compare` with both

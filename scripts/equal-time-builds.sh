@@ -8,7 +8,10 @@
 # the geometric mean of the ratios.
 #
 #   scripts/equal-time-builds.sh REV TIME "ALGOS" "SCENES"
-#   scripts/equal-time-builds.sh e7dad17 60s "mmlt mlt" "door caustic veach-bidir"
+#   scripts/equal-time-builds.sh e7dad17 60s "mmlt mlt" "door examples/scenes/caustic.pbrt veach-bidir"
+#
+# Against a build from before issue 17's fix of the built-in caustic (its light faced up), name the
+# caustic by its pbrt file, which both builds render alike.
 #
 # REV is built in a git worktree (scripts/build-rev.sh); NEW_BIN and OLD_BIN name binaries to use
 # instead of building them (so the checkout can change while a measurement runs). NEW_SETTING

@@ -8,8 +8,9 @@
 #   scripts/speed-compare.sh e7dad17
 #   scripts/speed-compare.sh e7dad17 "cornell door" "bdpt mmlt" 5
 #
-# Defaults: SCENES = veach-bidir (../shared/scenes) and the built-ins cornell caustic door ring
-# pool; ALGOS = pt bdpt pssmlt mmlt mlt cmlt memlt mept; ROUNDS = 3; RESOLUTION = 512x288;
+# Defaults: SCENES = veach-bidir (../shared/scenes), the caustic as a pbrt file
+# (examples/scenes/caustic.pbrt: the built-in's light faced up before issue 17, so builds on either
+# side of the fix would render different built-ins) and the built-ins cornell door ring pool; ALGOS = pt bdpt pssmlt mmlt mlt cmlt memlt mept; ROUNDS = 3; RESOLUTION = 512x288;
 # MAX_DEPTH = 7; SPP = 4 (PT: 4× that). REV is built in a git worktree (scripts/build-rev.sh:
 # ../charted-REV, or OLD_DIR); NEW_BIN and OLD_BIN name binaries to use instead of building them.
 # Prints, per scene and algorithm, the median render time of each build, the speed-up
@@ -18,7 +19,7 @@
 set -euo pipefail
 rev=$1
 root=$(cd "$(dirname "$0")/.." && pwd)
-scenes=${2:-"$root/../shared/scenes/veach-bidir/scene.pbrt cornell caustic door ring pool"}
+scenes=${2:-"$root/../shared/scenes/veach-bidir/scene.pbrt cornell $root/examples/scenes/caustic.pbrt door ring pool"}
 algos=${3:-"pt bdpt pssmlt mmlt mlt cmlt memlt mept"}
 rounds=${4:-3}
 res=${RESOLUTION:-512x288} depth=${MAX_DEPTH:-7} spp=${SPP:-4}
