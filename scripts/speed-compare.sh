@@ -36,6 +36,13 @@ knows_roulette() { "$1" render --help 2>/dev/null | grep -q -- '--roulette <'; }
 old_rr=() new_rr=()
 knows_roulette "$old_bin" && old_rr=(--roulette 0)
 knows_roulette "$new_bin" && new_rr=(--roulette 0)
+# Likewise the direct-lighting pass of the Metropolis methods (default since issue 17): off in
+# builds that know it, so the chains do the same work in both builds (its gain is measured at
+# equal time).
+knows_direct() { "$1" render --help 2>/dev/null | grep -q -- '--direct-samples <'; }
+old_direct=() new_direct=()
+knows_direct "$old_bin" && old_direct=(--direct-samples 0)
+knows_direct "$new_bin" && new_direct=(--direct-samples 0)
 
 # One run: prints "render-seconds peak-kilobytes".
 run() {
@@ -43,6 +50,9 @@ run() {
   [[ $algo == pt ]] && n=$((4 * spp))
   if [[ $algo == pt || $algo == bdpt || $algo == pssmlt ]]; then
     if [[ $bin == "$old_bin" ]]; then extra=("${old_rr[@]}"); else extra=("${new_rr[@]}"); fi
+  fi
+  if [[ $algo != pt && $algo != bdpt ]]; then
+    if [[ $bin == "$old_bin" ]]; then extra+=("${old_direct[@]}"); else extra+=("${new_direct[@]}"); fi
   fi
   /usr/bin/time -f '%M' -o "$out/mem" "$bin" render "$scene" --algo "$algo" --spp "$n" \
     --resolution "$res" --max-depth "$depth" "${extra[@]}" -o "$out/img.exr" > "$out/log" 2>&1 ||
@@ -57,8 +67,12 @@ median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] 
 printf '%-12s %-7s %9s %9s %8s %10s %10s\n' scene algo "old s" "new s" speed-up "old MB" "new MB"
 logsum=0 count=0
 for scene in $scenes; do
-  name=$(basename "$(dirname "$scene")")
-  [[ -f $scene ]] || name=$scene
+  # veach-bidir/scene.pbrt is named by its folder, other files by their stem, built-ins as given.
+  name=$scene
+  if [[ -f $scene ]]; then
+    name=$(basename "$scene" .pbrt)
+    [[ $name == scene ]] && name=$(basename "$(dirname "$scene")")
+  fi
   for algo in $algos; do
     : > "$out/old" && : > "$out/new"
     for _ in $(seq 1 "$rounds"); do
