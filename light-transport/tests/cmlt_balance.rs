@@ -122,21 +122,32 @@ fn exact_draw_in(
     }
 }
 
-/// Twice the largest `π_s(u)` in a pilot.
-fn bound(joint: &TechniqueJoint<'_>) -> f64 {
-    let mut rng = stream(0xB0, 0);
+/// The largest `π_s(u)` over `draws` uniform points of a pilot, each in the chart `chart` picks
+/// from `rng` (asserting that some point carries light).
+fn pilot_max(
+    joint: &TechniqueJoint<'_>,
+    rng: &mut ChainRng,
+    draws: usize,
+    mut chart: impl FnMut(&mut ChainRng) -> usize,
+) -> f64 {
     let mut top: f64 = 0.0;
-    for _ in 0..200_000 {
-        let s = uniform_index(uniform(&mut rng), K + 1);
+    for _ in 0..draws {
+        let s = chart(rng);
         let dim = joint.target.atlas.dim(s);
-        let mut state = CmltState::in_chart(s, (0..dim).map(|_| uniform(&mut rng)).collect());
+        let mut state = CmltState::in_chart(s, (0..dim).map(|_| uniform(rng)).collect());
         let l = joint.evaluate(&mut state);
         if l.is_finite() {
             top = top.max(l.exp());
         }
     }
     assert!(top > 0.0, "no light in the pilot");
-    2.0 * top
+    top
+}
+
+/// Twice the largest `π_s(u)` in a pilot.
+fn bound(joint: &TechniqueJoint<'_>) -> f64 {
+    let pick = |rng: &mut ChainRng| uniform_index(uniform(rng), K + 1);
+    2.0 * pilot_max(joint, &mut stream(0xB0, 0), 200_000, pick)
 }
 
 /// Chart, raster position, floor point.
@@ -604,18 +615,7 @@ const CAUSTIC_K: usize = 4;
 /// Eight times the largest `π_s(u)` of a pilot of 400 000 uniform draws in chart `chart` (every
 /// value met later is checked against it by [`exact_draw_in`]).
 fn chart_bound(joint: &TechniqueJoint<'_>, chart: usize) -> f64 {
-    let mut rng = stream(0xB1, chart as u64);
-    let dim = joint.target.atlas.dim(chart);
-    let mut top: f64 = 0.0;
-    for _ in 0..400_000 {
-        let mut state = CmltState::in_chart(chart, (0..dim).map(|_| uniform(&mut rng)).collect());
-        let l = joint.evaluate(&mut state);
-        if l.is_finite() {
-            top = top.max(l.exp());
-        }
-    }
-    assert!(top > 0.0, "no light in the pilot of chart {chart}");
-    8.0 * top
+    8.0 * pilot_max(joint, &mut stream(0xB1, chart as u64), 400_000, |_| chart)
 }
 
 /// Raster block (6×5 of the 36×30 image) and number of specular vertices, both categorical; the
