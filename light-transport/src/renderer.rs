@@ -6,7 +6,7 @@
 
 use crate::Result;
 use crate::budget::Budget;
-use crate::film::Film;
+use crate::film::{Film, FilmView};
 use crate::integrators::{Estimator, Sampling, render};
 use crate::metropolis::{Method, MetropolisSettings, MetropolisStats, run_with};
 use crate::sampler::PixelSampler;
@@ -48,12 +48,13 @@ pub struct Report {
     pub metropolis: Option<MetropolisStats>,
 }
 
-/// How a render is watched: `progress` sees the film after every pass or round and may stop the
+/// How a render is watched: `progress` sees the film after every pass or round (as a view, whose
+/// image is built only if the callback asks for it) and may stop the
 /// render by returning `false`; `stop` (set by a signal handler) stops it at the end of the
 /// current pass, or of the current slice of a Metropolis round.
 pub struct Control<'a> {
     /// Called after every pass or round.
-    pub progress: &'a mut dyn FnMut(&Film, &Progress) -> bool,
+    pub progress: &'a mut dyn FnMut(FilmView<'_>, &Progress) -> bool,
     /// A stop request.
     pub stop: Option<&'a AtomicBool>,
 }
@@ -117,7 +118,7 @@ impl<E: Estimator> Renderer for Passes<E> {
                 elapsed: p.elapsed,
                 rays: p.rays,
             };
-            let go_on = (control.progress)(film, &progress);
+            let go_on = (control.progress)(FilmView::One(film), &progress);
             interrupted = control.stopped();
             go_on && !interrupted
         });
@@ -190,7 +191,7 @@ impl<M: Method> Renderer for Metropolis<M> {
                     elapsed: start.elapsed(),
                     rays: 0,
                 };
-                (control.progress)(film, &progress)
+                (control.progress)(FilmView::One(film), &progress)
             },
         )?;
         let details = self.details(&stats, pixels);

@@ -28,7 +28,7 @@ use common::{
 };
 use light_transport::Budget;
 use light_transport::cmlt::{Cmlt, CmltSettings};
-use light_transport::film::{Film, Image};
+use light_transport::film::{FilmView, Image};
 use light_transport::integrators::Bdpt;
 use light_transport::metropolis::{
     self, Contribution, DIRECT_EDGES, ImportanceKind, Method, MetropolisSettings, Mmlt,
@@ -780,7 +780,7 @@ fn the_direct_pass_keeps_pace_with_the_chains() {
     .expect("a direct pass");
     let render = |threads: usize| {
         with_threads(threads, || {
-            let mut go_on = |_: &Film, _: &Progress| true;
+            let mut go_on = |_: FilmView<'_>, _: &Progress| true;
             let mut control = Control {
                 progress: &mut go_on,
                 stop: None,
@@ -797,7 +797,7 @@ fn the_direct_pass_keeps_pace_with_the_chains() {
 
     let stop = AtomicBool::new(false);
     let mut rounds = 0;
-    let mut stop_after_two = |_: &Film, _: &Progress| {
+    let mut stop_after_two = |_: FilmView<'_>, _: &Progress| {
         rounds += 1;
         if rounds == 2 {
             stop.store(true, Ordering::Relaxed);
@@ -862,7 +862,7 @@ fn a_render_stopped_in_the_direct_pass_keeps_its_work() {
         SeparateDirect::new(mmlt(), settings(1000, 4.0, 1), MisHeuristic::Power, 64, 0.2)
             .expect("a direct pass");
     let stop = AtomicBool::new(true);
-    let mut go_on = |_: &Film, _: &Progress| true;
+    let mut go_on = |_: FilmView<'_>, _: &Progress| true;
     let mut control = Control {
         progress: &mut go_on,
         stop: Some(&stop),
@@ -897,7 +897,7 @@ WorldEnd
         light_transport::scene::pbrt::load_str(text, std::path::Path::new("."), "floor.pbrt")
             .unwrap();
     let scene = Scene::new(&desc, Some((W, H))).unwrap();
-    let mut go_on = |_: &Film, _: &Progress| true;
+    let mut go_on = |_: FilmView<'_>, _: &Progress| true;
     let mut control = Control {
         progress: &mut go_on,
         stop: None,

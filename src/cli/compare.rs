@@ -12,7 +12,7 @@ use super::run::run_renderer;
 use super::scene_arg;
 use clap::Args;
 use light_transport::Budget;
-use light_transport::film::Film;
+use light_transport::film::FilmView;
 use light_transport::film::{Image, error_image, metrics, read_image, write_bytes_png};
 use light_transport::renderer::{Passes, Progress};
 use std::io::Write;
@@ -89,15 +89,15 @@ impl<'a> Checkpoints<'a> {
     }
 
     /// Record any checkpoint passed; `false` once the time is up or on error.
-    fn see(&mut self, film: &Film, elapsed: Duration, spp: u64) -> bool {
+    fn see(&mut self, film: FilmView<'_>, elapsed: Duration, spp: u64) -> bool {
         self.record(film, elapsed, spp, false)
     }
 
     /// Record the checkpoints `elapsed` has reached (all the remaining ones when `last`: a time
     /// budget's fractional last pass may end a hair before the budget).
-    fn record(&mut self, film: &Film, elapsed: Duration, spp: u64, last: bool) -> bool {
+    fn record(&mut self, film: FilmView<'_>, elapsed: Duration, spp: u64, last: bool) -> bool {
         while self.next < self.marks.len() && (last || elapsed >= self.marks[self.next]) {
-            match metrics(&Image::from_film(film), self.reference) {
+            match metrics(&film.image(), self.reference) {
                 Ok(m) => self.rows.push(Row {
                     algo: self.name,
                     checkpoint: self.next + 1,
@@ -135,9 +135,14 @@ fn track(
         Budget::Time(a.time),
         a.options.seed,
         true,
-        |film: &Film, p: &Progress| cp.see(film, p.elapsed, p.samples_per_pixel as u64),
+        |film: FilmView<'_>, p: &Progress| cp.see(film, p.elapsed, p.samples_per_pixel as u64),
     )?;
-    cp.record(&film, report.elapsed, report.samples_per_pixel as u64, true);
+    cp.record(
+        FilmView::One(&film),
+        report.elapsed,
+        report.samples_per_pixel as u64,
+        true,
+    );
     cp.finish()?;
     let secs = report.elapsed.as_secs_f64().max(1e-9);
     eprintln!(
@@ -190,7 +195,7 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
                 Budget::Time(t),
                 a.options.seed ^ super::reference::REFERENCE_SEED,
                 false,
-                |_: &Film, _: &Progress| true,
+                |_: FilmView<'_>, _: &Progress| true,
             )?;
             let img = Image::from_film(&film);
             write_outputs(

@@ -9,7 +9,7 @@ use super::run::run_renderer;
 use super::scene_arg;
 use clap::Args;
 use light_transport::Budget;
-use light_transport::film::{Film, Image, write_exr, write_png};
+use light_transport::film::{FilmView, Image, write_exr, write_png};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -99,9 +99,9 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
     let (exr, png) = output_paths(&a.output, &loaded.name, a.algo.name);
     let renderer = registry::build(a.algo, &scene, &a.options.common(), &a.algos)?;
     let mut last_write = Instant::now();
-    let every = |film: &Film, _: &light_transport::renderer::Progress| {
+    let every = |film: FilmView<'_>, _: &light_transport::renderer::Progress| {
         if last_write.elapsed() >= a.write_every {
-            let _ = write_outputs(&Image::from_film(film), &exr, &png, a.options.exposure);
+            let _ = write_outputs(&film.image(), &exr, &png, a.options.exposure);
             last_write = Instant::now();
         }
         true

@@ -3,7 +3,7 @@
 use super::CliError;
 use indicatif::{ProgressBar, ProgressStyle};
 use light_transport::Budget;
-use light_transport::film::Film;
+use light_transport::film::{Film, FilmView};
 use light_transport::renderer::{Control, Progress, Renderer, Report};
 use light_transport::scene::Scene;
 
@@ -16,7 +16,7 @@ pub fn run_renderer(
     budget: Budget,
     seed: u64,
     quiet: bool,
-    mut every: impl FnMut(&Film, &Progress) -> bool,
+    mut every: impl FnMut(FilmView<'_>, &Progress) -> bool,
 ) -> Result<(Film, Report), CliError> {
     let bar = if quiet {
         ProgressBar::hidden()
@@ -31,7 +31,7 @@ pub fn run_renderer(
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar.set_message("starting");
-    let mut progress = |film: &Film, p: &Progress| {
+    let mut progress = |film: FilmView<'_>, p: &Progress| {
         match budget {
             Budget::SamplesPerPixel(_) => bar.set_position((p.samples_per_pixel * 1000.0) as u64),
             Budget::Time(_) => bar.set_position(p.elapsed.as_millis() as u64),

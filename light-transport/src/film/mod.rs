@@ -22,14 +22,21 @@ use crate::spectrum::Rgb;
 pub type Splat = ([f64; 2], Rgb);
 
 /// An image under accumulation.
+///
+/// Each buffer is allocated by its first deposit, so a film that only splats (a Metropolis
+/// render's chains) or only takes camera samples (path tracing, the Metropolis methods' direct
+/// pass) holds 24 or 32 bytes a pixel instead of 56 (README, issue 17).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     /// Width.
     pub width: usize,
     /// Height.
     pub height: usize,
+    /// Sums of camera-sample estimates (empty until the first sample).
     pixel_sum: Vec<Rgb>,
+    /// Camera samples per pixel (empty until the first sample).
     pixel_count: Vec<f64>,
+    /// Sums of splats (empty until the first splat).
     splat_sum: Vec<Rgb>,
     /// Number of splatting samples per pixel the splat buffer is divided by (0: no splats).
     pub splat_scale: f64,
@@ -70,13 +77,33 @@ impl Film {
         Self {
             width,
             height,
-            pixel_sum: vec![Rgb::BLACK; width * height],
-            pixel_count: vec![0.0; width * height],
-            splat_sum: vec![Rgb::BLACK; width * height],
+            pixel_sum: Vec::new(),
+            pixel_count: Vec::new(),
+            splat_sum: Vec::new(),
             splat_scale: 0.0,
             discarded: 0,
             layers: Vec::new(),
         }
+    }
+
+    /// The splat buffer, allocated if it is not yet.
+    #[inline]
+    fn splats_mut(&mut self) -> &mut [Rgb] {
+        if self.splat_sum.is_empty() {
+            self.splat_sum = vec![Rgb::BLACK; self.width * self.height];
+        }
+        &mut self.splat_sum
+    }
+
+    /// The camera-sample buffers (sums, counts), allocated if they are not yet.
+    #[inline]
+    fn samples_mut(&mut self) -> (&mut [Rgb], &mut [f64]) {
+        if self.pixel_count.is_empty() {
+            let n = self.width * self.height;
+            self.pixel_sum = vec![Rgb::BLACK; n];
+            self.pixel_count = vec![0.0; n];
+        }
+        (&mut self.pixel_sum, &mut self.pixel_count)
     }
 
     /// Splat layer `layer`, its pixels allocated if `pixels` (layers up to it made as needed).
@@ -106,7 +133,7 @@ impl Film {
             return;
         }
         if let Some(i) = self.pixel_of(r) {
-            self.splat_sum[i] += v;
+            self.splats_mut()[i] += v;
             let s = &mut self.layer(layer, true).sum[i];
             for (s, v) in s.iter_mut().zip(v.0) {
                 *s += v as f32;
@@ -130,9 +157,10 @@ impl Film {
     /// Add one camera-sample estimate to pixel `index`.
     #[inline]
     pub fn add_sample(&mut self, index: usize, v: Rgb) {
-        self.pixel_count[index] += 1.0;
+        let (sum, count) = self.samples_mut();
+        count[index] += 1.0;
         if v.is_finite() {
-            self.pixel_sum[index] += v;
+            sum[index] += v;
         } else {
             self.discarded += 1;
         }
@@ -146,7 +174,7 @@ impl Film {
             return;
         }
         if let Some(i) = self.pixel_of(r) {
-            self.splat_sum[i] += v;
+            self.splats_mut()[i] += v;
         }
     }
 
@@ -154,45 +182,102 @@ impl Film {
     /// buffer as they count now (times their scale). Merging in a fixed order keeps results
     /// independent of the thread count.
     pub fn merge(&mut self, o: &Film) {
-        for i in 0..self.pixel_sum.len() {
-            self.pixel_sum[i] += o.pixel_sum[i];
-            self.pixel_count[i] += o.pixel_count[i];
-            self.splat_sum[i] += o.splat_sum[i];
+        if !o.pixel_count.is_empty() {
+            let (sum, count) = self.samples_mut();
+            for i in 0..sum.len() {
+                sum[i] += o.pixel_sum[i];
+                count[i] += o.pixel_count[i];
+            }
         }
-        for l in o
-            .layers
-            .iter()
-            .filter(|l| !l.sum.is_empty() && l.scale != 1.0)
-        {
-            for (i, a) in self.splat_sum.iter_mut().enumerate() {
-                *a += l.correction(i);
+        if !o.splat_sum.is_empty() {
+            let splats = self.splats_mut();
+            for (a, b) in splats.iter_mut().zip(&o.splat_sum) {
+                *a += *b;
+            }
+            for l in o.corrected_layers() {
+                for (i, a) in splats.iter_mut().enumerate() {
+                    *a += l.correction(i);
+                }
             }
         }
         self.splat_scale += o.splat_scale;
         self.discarded += o.discarded;
     }
 
+    /// The layers whose correction is not zero.
+    fn corrected_layers(&self) -> impl Iterator<Item = &Layer> {
+        self.layers
+            .iter()
+            .filter(|l| !l.sum.is_empty() && l.scale != 1.0)
+    }
+
+    /// Pixel `i`'s camera-sample sum and count and its splat sum with this film's layer
+    /// corrections, as [`Film::image`] reads them.
+    #[inline]
+    fn parts(&self, i: usize) -> (Rgb, f64, Rgb) {
+        let (sum, count) = match self.pixel_count.is_empty() {
+            true => (Rgb::BLACK, 0.0),
+            false => (self.pixel_sum[i], self.pixel_count[i]),
+        };
+        let mut splats = self.splat_sum.get(i).copied().unwrap_or(Rgb::BLACK);
+        for l in self.corrected_layers() {
+            splats += l.correction(i);
+        }
+        (sum, count, splats)
+    }
+
+    /// A pixel's value from its parts.
+    #[inline]
+    fn value(sum: Rgb, count: f64, splats: Rgb, splat_scale: f64) -> Rgb {
+        let mut v = if count > 0.0 { sum / count } else { Rgb::BLACK };
+        if splat_scale > 0.0 {
+            v += splats / splat_scale;
+        }
+        v
+    }
+
     /// The current estimate of every pixel, row-major, top row first.
     pub fn image(&self) -> Vec<Rgb> {
-        (0..self.pixel_sum.len())
+        (0..self.width * self.height)
             .map(|i| {
-                let mut v = if self.pixel_count[i] > 0.0 {
-                    self.pixel_sum[i] / self.pixel_count[i]
-                } else {
-                    Rgb::BLACK
+                let (sum, count, splats) = self.parts(i);
+                Self::value(sum, count, splats, self.splat_scale)
+            })
+            .collect()
+    }
+
+    /// The image of this film with `o` merged into it, bit for bit what `merge` then `image`
+    /// give, without the merged film's buffers: a render's progress report shows two films
+    /// (the Metropolis methods' direct pass and their chains) as one this way.
+    pub fn merged_image(&self, o: &Film) -> Vec<Rgb> {
+        assert_eq!((self.width, self.height), (o.width, o.height), "film sizes");
+        let scale = self.splat_scale + o.splat_scale;
+        (0..self.width * self.height)
+            .map(|i| {
+                // The order of `merge` (this film's buffers plus the other's, its splats with
+                // its layer corrections), then this film's layer corrections as `image` adds
+                // them.
+                let (mut sum, mut count, mut splats) = match self.pixel_count.is_empty() {
+                    true => (Rgb::BLACK, 0.0, Rgb::BLACK),
+                    false => (self.pixel_sum[i], self.pixel_count[i], Rgb::BLACK),
                 };
-                if self.splat_scale > 0.0 {
-                    let mut splats = self.splat_sum[i];
-                    for l in self
-                        .layers
-                        .iter()
-                        .filter(|l| !l.sum.is_empty() && l.scale != 1.0)
-                    {
+                if !o.pixel_count.is_empty() {
+                    sum += o.pixel_sum[i];
+                    count += o.pixel_count[i];
+                }
+                if let Some(&s) = self.splat_sum.get(i) {
+                    splats = s;
+                }
+                if let Some(&s) = o.splat_sum.get(i) {
+                    splats += s;
+                    for l in o.corrected_layers() {
                         splats += l.correction(i);
                     }
-                    v += splats / self.splat_scale;
                 }
-                v
+                for l in self.corrected_layers() {
+                    splats += l.correction(i);
+                }
+                Self::value(sum, count, splats, scale)
             })
             .collect()
     }
@@ -200,6 +285,38 @@ impl Film {
     /// Camera samples accumulated over the whole film.
     pub fn camera_samples(&self) -> f64 {
         self.pixel_count.iter().sum()
+    }
+}
+
+/// A render's film as a progress report shows it: one film, or two (a Metropolis method's
+/// direct pass and its chains) counted as their merge, which is built only when asked for.
+#[derive(Clone, Copy, Debug)]
+pub enum FilmView<'a> {
+    /// One film.
+    One(&'a Film),
+    /// Two films counted as the first with the second merged into it ([`Film::merge`]).
+    Merged(&'a Film, &'a Film),
+}
+
+impl FilmView<'_> {
+    /// The current image.
+    pub fn image(&self) -> Image {
+        match *self {
+            FilmView::One(f) => Image::from_film(f),
+            FilmView::Merged(a, b) => Image {
+                width: a.width,
+                height: a.height,
+                pixels: a.merged_image(b),
+            },
+        }
+    }
+
+    /// Samples rejected as NaN or infinite so far.
+    pub fn discarded(&self) -> u64 {
+        match *self {
+            FilmView::One(f) => f.discarded,
+            FilmView::Merged(a, b) => a.discarded + b.discarded,
+        }
     }
 }
 
@@ -319,6 +436,84 @@ mod tests {
         let got = f.image()[0].0[0];
         let rel = (got - 1.03 * exact).abs() / (1.03 * exact);
         assert!(rel < 1e-8, "relative error {rel:e}");
+    }
+
+    /// The bytes a film's buffers hold.
+    fn heap_bytes(f: &Film) -> usize {
+        f.pixel_sum.capacity() * size_of::<Rgb>()
+            + f.pixel_count.capacity() * size_of::<f64>()
+            + f.splat_sum.capacity() * size_of::<Rgb>()
+            + f.layers
+                .iter()
+                .map(|l| l.sum.capacity() * 12)
+                .sum::<usize>()
+    }
+
+    /// Buffers come with their first deposit: a splatting film holds 24 bytes a pixel, a
+    /// sampling one 32, both 56, and merging an empty film allocates nothing.
+    #[test]
+    fn buffers_are_allocated_by_their_first_deposit() {
+        let (w, h) = (8, 4);
+        let mut f = Film::new(w, h);
+        assert_eq!(heap_bytes(&f), 0);
+        f.merge(&Film::new(w, h));
+        assert_eq!(heap_bytes(&f), 0);
+        assert_eq!(f.image(), vec![Rgb::BLACK; w * h]);
+        f.add_splat([100.0, 0.5], Rgb::splat(1.0)); // off the film: nothing to hold
+        assert_eq!(heap_bytes(&f), 0);
+        f.add_splat([1.5, 0.5], Rgb::splat(1.0));
+        assert_eq!(heap_bytes(&f), 24 * w * h);
+        let mut g = Film::new(w, h);
+        g.add_sample(3, Rgb::splat(1.0));
+        assert_eq!(heap_bytes(&g), 32 * w * h);
+        assert_eq!(g.camera_samples(), 1.0);
+        g.merge(&f);
+        assert_eq!(heap_bytes(&g), 56 * w * h);
+    }
+
+    /// `merged_image` is `merge` then `image`, bit for bit, whichever buffers and layers the two
+    /// films have (a changed summation order shows in the last bits of these values).
+    #[test]
+    fn merged_image_is_merge_then_image() {
+        let (w, h) = (3, 2);
+        let mut films = Vec::new();
+        for kind in 0..5 {
+            let mut f = Film::new(w, h);
+            let mut x = 0.1 + 0.07 * kind as f64;
+            let mut next = || {
+                x = 3.9 * x * (1.0 - x);
+                x
+            };
+            for i in 0..w * h {
+                if kind == 1 || kind == 3 {
+                    f.add_sample(i, Rgb::new(next(), next(), next()));
+                }
+                if kind >= 2 {
+                    f.add_splat([i as f64 % 3.0 + 0.5, 0.5], Rgb::splat(next()));
+                }
+                if kind >= 3 {
+                    for layer in 0..2 {
+                        f.add_layer_splat(layer, [0.5, i as f64 % 2.0 + 0.5], Rgb::splat(next()));
+                    }
+                }
+            }
+            if kind >= 3 {
+                f.set_layer_scale(0, 1.0 + next() * 0.1);
+                f.set_layer_scale(1, 1.0 - next() * 0.1);
+            }
+            f.splat_scale = if kind >= 2 { 0.3 * kind as f64 } else { 0.0 };
+            films.push(f);
+        }
+        for a in &films {
+            for b in &films {
+                let mut m = a.clone();
+                m.merge(b);
+                let (want, got) = (m.image(), a.merged_image(b));
+                for (x, y) in want.iter().zip(&got) {
+                    assert_eq!(x.0.map(f64::to_bits), y.0.map(f64::to_bits));
+                }
+            }
+        }
     }
 
     #[test]

@@ -20,7 +20,7 @@
 
 use super::driver::{Method, MetropolisSettings};
 use crate::budget::Budget;
-use crate::film::{Film, Image};
+use crate::film::{Film, FilmView, Image};
 use crate::integrators::Estimator;
 use crate::integrators::{DirectLighting, Sampling, pass};
 use crate::path::MisHeuristic;
@@ -243,17 +243,25 @@ impl<R: Chains> Renderer for SeparateDirect<R> {
         let before_chains = direct.time;
         let result = {
             let direct = &mut direct;
-            let mut progress = |film: &Film, p: &Progress| {
+            let mut progress = |film: FilmView<'_>, p: &Progress| {
                 while owed(direct, p.samples_per_pixel) && !stopped() {
                     direct.pass(scene, &self.direct, seed);
                 }
-                let mut both = direct.film.clone();
-                both.merge(film);
                 let p = Progress {
                     elapsed: start.elapsed(),
                     ..*p
                 };
-                (control.progress)(&both, &p)
+                match film {
+                    FilmView::One(chains) => {
+                        (control.progress)(FilmView::Merged(&direct.film, chains), &p)
+                    }
+                    // Chains that report two films themselves: their merge is built here.
+                    FilmView::Merged(a, b) => {
+                        let mut chains = a.clone();
+                        chains.merge(b);
+                        (control.progress)(FilmView::Merged(&direct.film, &chains), &p)
+                    }
+                }
             };
             let mut chain_control = Control {
                 progress: &mut progress,

@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use light_transport::Budget;
-use light_transport::film::{Film, Image};
+use light_transport::film::{Film, FilmView, Image};
 use light_transport::integrators::{Bdpt, render};
 use light_transport::metropolis::{self, Method, MetropolisSettings, MetropolisStats, Seeding};
 use light_transport::path::{MisHeuristic, WalkSettings};
@@ -135,7 +135,7 @@ pub fn renderer_runs(
 ) -> Vec<Vec<f64>> {
     (0..runs)
         .map(|r| {
-            let mut go_on = |_: &Film, _: &Progress| true;
+            let mut go_on = |_: FilmView<'_>, _: &Progress| true;
             let mut control = Control {
                 progress: &mut go_on,
                 stop: None,
