@@ -375,8 +375,8 @@ impl Sink<CmltState> for PerChart {
     fn chunk(&self) -> ChartSplats {
         ChartSplats(Vec::new())
     }
-    fn absorb(&mut self, chunk: ChartSplats) {
-        for (c, (r, v)) in chunk.0 {
+    fn absorb(&mut self, chunk: &mut ChartSplats) {
+        for (c, (r, v)) in chunk.0.drain(..) {
             if let Some(f) = self.films.get_mut(c) {
                 f.add_splat(r, v);
             }

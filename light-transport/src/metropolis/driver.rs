@@ -283,6 +283,11 @@ const CHAINS: u64 = 0xC4A1;
 const SPLIT: usize = 16;
 /// Most slices a round is cut into (the granularity of an interrupt).
 const SLICES: u64 = 8;
+/// Most mutations (over all chains) a slice makes. A slice's deposits are held in per-chunk
+/// buffers until it ends and then enter the sink in chunk order, so this bounds that memory:
+/// PSSMLT records every strategy of both states at every mutation, and rounds of an eighth of
+/// a render once held 0.5 GB of splats at 1920×1080 (README, issue 17).
+const SLICE_MUTATIONS: u64 = 1 << 18;
 const EXCHANGE: u64 = 0xE8C4;
 
 fn key(seed: u64, g: usize, i: usize) -> u64 {
@@ -427,8 +432,9 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
         .collect();
     method.warm_up(scene, &chains, settings.seed)?;
     stats.seed_time = t.elapsed();
-    // 3. Chains in rounds; a round is made of slices (at most SLICES, and cut at every exchange),
-    //    so an interrupt stops within a fraction of a round.
+    // 3. Chains in rounds; a round is made of slices (at most SLICES, of at most SLICE_MUTATIONS
+    //    mutations, and cut at every exchange), so an interrupt stops within a fraction of a
+    //    round and the deposits held at a time stay bounded.
     let t = Instant::now();
     let total = match settings.budget {
         Budget::SamplesPerPixel(m) => Some((m * pixels).max(1.0) as u64),
@@ -488,7 +494,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
                     (sink.chunk(), 0, t)
                 })
                 .collect();
-        let slice = k.div_ceil(SLICES).max(1);
+        let slice = k.div_ceil(SLICES).min(SLICE_MUTATIONS / nchains).max(1);
         let mut left = k;
         let mut since_exchange = 0;
         while left > 0 {
@@ -511,6 +517,10 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
                     method.mutate_chunk(scene, cs, rs, step, &mut rec);
                     *rays += crate::accel::take_ray_count();
                 });
+            // The slice's deposits enter the sink in chunk order (whatever the thread count).
+            for (chunk, _, _) in &mut outputs {
+                sink.absorb(chunk);
+            }
             left -= step;
             since_exchange += step;
             stats.mutations += step * nchains;
@@ -524,8 +534,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
                 break;
             }
         }
-        for (chunk, rays, round_tally) in outputs {
-            sink.absorb(chunk);
+        for (_, rays, round_tally) in outputs {
             stats.rays += rays;
             if let (Some(t), Some(r)) = (tally.as_mut(), round_tally) {
                 t.merge(&r);

@@ -277,8 +277,9 @@ pub trait Sink<S>: Send {
     type Chunk: Recorder<S> + Send;
     /// An empty chunk.
     fn chunk(&self) -> Self::Chunk;
-    /// Absorb a chunk (called in chunk order).
-    fn absorb(&mut self, chunk: Self::Chunk);
+    /// Absorb a chunk's deposits (called in chunk order), leaving it without them: the same
+    /// chunk goes on recording (its buffers keep their storage).
+    fn absorb(&mut self, chunk: &mut Self::Chunk);
     /// The chains have made `mutations` mutations in all, on an image of `pixels` pixels.
     fn mutations_done(&mut self, mutations: u64, pixels: f64);
     /// What the chains of group `g` recorded by [`Recorder::record_chain`], so far and from now
@@ -318,11 +319,11 @@ impl<S: Recordable> Sink<S> for Film {
         FilmChunk::default()
     }
 
-    fn absorb(&mut self, chunk: FilmChunk) {
-        for (r, v) in chunk.splats {
+    fn absorb(&mut self, chunk: &mut FilmChunk) {
+        for (r, v) in chunk.splats.drain(..) {
             self.add_splat(r, v);
         }
-        for (g, (r, v)) in chunk.chain {
+        for (g, (r, v)) in chunk.chain.drain(..) {
             self.add_layer_splat(g, r, v);
         }
     }

@@ -374,10 +374,10 @@ impl<'a> Sink<PathState> for PhotonSink<'a> {
         }
     }
 
-    fn absorb(&mut self, chunk: PhotonChunk<'a>) {
-        self.capped += chunk.capped;
-        self.deposits += chunk.deposits;
-        for (key, (caustic, p)) in chunk.photons {
+    fn absorb(&mut self, chunk: &mut PhotonChunk<'a>) {
+        self.capped += std::mem::take(&mut chunk.capped);
+        self.deposits += std::mem::take(&mut chunk.deposits);
+        for (key, (caustic, p)) in chunk.photons.drain() {
             self.photons
                 .entry(key)
                 .and_modify(|(_, q)| q.power += p.power)
