@@ -204,6 +204,31 @@ impl Film {
         self.discarded += o.discarded;
     }
 
+    /// [`Film::merge`] of a film no longer needed: a buffer this film does not have yet is taken
+    /// over rather than allocated and added to (the same sums, since `0 + x = x`), so merging a
+    /// Metropolis render's chains into its direct pass needs no third splat buffer.
+    pub fn merge_owned(&mut self, mut o: Film) {
+        if self.pixel_count.is_empty() {
+            std::mem::swap(&mut self.pixel_sum, &mut o.pixel_sum);
+            std::mem::swap(&mut self.pixel_count, &mut o.pixel_count);
+        }
+        if self.splat_sum.is_empty() && !o.splat_sum.is_empty() {
+            self.splat_sum = std::mem::take(&mut o.splat_sum);
+            for l in o.corrected_layers() {
+                for (i, a) in self.splat_sum.iter_mut().enumerate() {
+                    *a += l.correction(i);
+                }
+            }
+            self.splat_scale += o.splat_scale;
+            self.discarded += o.discarded;
+            // `o` keeps no splats: merging the rest adds its scale and count once more.
+            o.splat_scale = 0.0;
+            o.discarded = 0;
+            o.layers.clear();
+        }
+        self.merge(&o);
+    }
+
     /// The layers whose correction is not zero.
     fn corrected_layers(&self) -> impl Iterator<Item = &Layer> {
         self.layers
@@ -512,6 +537,52 @@ mod tests {
                 for (x, y) in want.iter().zip(&got) {
                     assert_eq!(x.0.map(f64::to_bits), y.0.map(f64::to_bits));
                 }
+            }
+        }
+    }
+
+    /// `merge_owned` is `merge`, bit for bit, whichever buffers either film has.
+    #[test]
+    fn merge_owned_is_merge() {
+        let (w, h) = (3, 2);
+        let make = |samples: bool, splats: bool, layer: bool| {
+            let mut f = Film::new(w, h);
+            for i in 0..w * h {
+                let x = 0.1 + 0.37 * i as f64;
+                if samples {
+                    f.add_sample(i, Rgb::new(x, 2.0 * x, 0.3));
+                }
+                if splats {
+                    f.add_splat([(i % w) as f64 + 0.5, 0.5], Rgb::splat(x / 3.0));
+                }
+                if layer {
+                    f.add_layer_splat(0, [0.5, (i % h) as f64 + 0.5], Rgb::splat(x / 7.0));
+                }
+            }
+            f.set_layer_scale(0, 1.07);
+            f.splat_scale = if splats || layer { 1.5 } else { 0.0 };
+            f.discarded = u64::from(samples) + 2 * u64::from(splats);
+            f
+        };
+        let kinds = [
+            (false, false, false),
+            (true, false, false),
+            (false, true, false),
+            (false, true, true),
+            (true, true, true),
+        ];
+        for &a in &kinds {
+            for &b in &kinds {
+                let mut want = make(a.0, a.1, a.2);
+                want.merge(&make(b.0, b.1, b.2));
+                let mut got = make(a.0, a.1, a.2);
+                got.merge_owned(make(b.0, b.1, b.2));
+                assert_eq!(got.image(), want.image(), "{a:?} {b:?}");
+                assert_eq!(
+                    (got.splat_scale, got.discarded),
+                    (want.splat_scale, want.discarded)
+                );
+                assert_eq!(got.camera_samples(), want.camera_samples());
             }
         }
     }

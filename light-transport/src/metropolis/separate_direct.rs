@@ -317,7 +317,7 @@ impl<R: Chains> Renderer for SeparateDirect<R> {
         report.interrupted |= stopped();
         report.details.insert(0, direct.line());
         let mut film = direct.film;
-        film.merge(&chains);
+        film.merge_owned(chains);
         report.rays += direct.rays;
         report.discarded = film.discarded;
         report.elapsed = start.elapsed();
