@@ -1882,3 +1882,34 @@ fn radiance_compression_is_the_ratio_of_radiance_to_importance_transport() {
     }
     assert!(checked > 300, "{checked} samples checked");
 }
+
+/// `Bsdf::pdf_pair` is two `Bsdf::pdf` calls, bit for bit, on every configuration: random pairs
+/// of directions on both sides and pairs the BSDF samples itself (so that sharp lobes give
+/// nonzero densities).
+#[test]
+fn pdf_pair_is_both_pdfs() {
+    let mut rng = stream(107, 0);
+    let random_dir = |rng: &mut ChainRng| dir(1.0 - 2.0 * uniform(rng), 2.0 * PI * uniform(rng));
+    let mut nonzero = 0;
+    for case in cases() {
+        let b = &case.bsdf;
+        for k in 0..2000 {
+            let wa = b.frame.to_world(random_dir(&mut rng));
+            let sampled = (k % 2 == 1)
+                .then(|| {
+                    let (ul, u) = u3(&mut rng);
+                    b.sample(wa, ul, u, TransportMode::Radiance)
+                })
+                .flatten();
+            let wb = sampled.map_or_else(|| b.frame.to_world(random_dir(&mut rng)), |s| s.wi);
+            let (ab, ba) = b.pdf_pair(wa, wb);
+            assert_eq!(ab.to_bits(), b.pdf(wa, wb).to_bits(), "{}", case.name);
+            assert_eq!(ba.to_bits(), b.pdf(wb, wa).to_bits(), "{}", case.name);
+            nonzero += usize::from(ab > 0.0 && ba > 0.0);
+        }
+    }
+    assert!(
+        nonzero > 10_000,
+        "only {nonzero} pairs with both densities nonzero"
+    );
+}

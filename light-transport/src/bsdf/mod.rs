@@ -290,6 +290,26 @@ impl Bsdf {
         if p.is_finite() { p } else { 0.0 }
     }
 
+    /// `(pdf(a, b), pdf(b, a))`: both densities between two directions, bit for bit those of two
+    /// [`Bsdf::pdf`] calls, with the directions brought into the local frame once (a connection's
+    /// MIS weight needs both at each end: [`crate::path::mis_weight`]).
+    pub fn pdf_pair(&self, a: DVec3, b: DVec3) -> (f64, f64) {
+        let Some((la, lb)) = self.locals(a, b) else {
+            return (0.0, 0.0);
+        };
+        let one = |wo: DVec3, wi: DVec3| {
+            let p = self.lobes.probabilities(wo);
+            let terms = self.lobes.pdf_terms(&p, wo, wi);
+            let len = self.lobes.as_slice().len();
+            let total: f64 = terms[..len]
+                .iter()
+                .map(|&w| if w.is_finite() { w } else { 0.0 })
+                .sum();
+            if total.is_finite() { total } else { 0.0 }
+        };
+        (one(la, lb), one(lb, la))
+    }
+
     /// `(f, probability)` of the delta lobes producing `wi` from `wo`, as [`Bsdf::sample`] would
     /// report them; `None` when no delta lobe produces `wi`.
     pub fn eval_delta(&self, wo: DVec3, wi: DVec3, mode: TransportMode) -> Option<BsdfSample> {

@@ -45,19 +45,24 @@ pub fn mis_weight(
     let pt_minus = if t > 1 { Some(&camera[t - 2]) } else { None };
     let qs = if s > 0 { Some(&light[s - 1]) } else { None };
     let qs_minus = if s > 1 { Some(&light[s - 2]) } else { None };
-    // Reverse densities at the connection (the other vertices keep the walks' values).
-    let pt_rev = match qs {
-        Some(q) => q.pdf(scene, qs_minus, pt),
-        None => pt.pdf_light_origin(scene),
+    // Reverse densities at the connection (the other vertices keep the walks' values). Where
+    // both densities between the same two neighbours of a vertex are wanted, one call gives
+    // both.
+    let (pt_rev, qs_minus_rev) = match (qs, qs_minus) {
+        (Some(q), Some(qm)) => {
+            let (to_pt, to_qm) = q.pdf_pair(scene, qm, pt);
+            (to_pt, Some(to_qm))
+        }
+        (Some(q), None) => (q.pdf(scene, None, pt), None),
+        (None, _) => (pt.pdf_light_origin(scene), None),
     };
-    let pt_minus_rev = pt_minus.map(|pm| match qs {
-        Some(q) => pt.pdf(scene, Some(q), pm),
-        None => pt.pdf_light(scene, pm),
-    });
-    let qs_rev = qs.map(|q| pt.pdf(scene, pt_minus, q));
-    let qs_minus_rev = match (qs, qs_minus) {
-        (Some(q), Some(qm)) => Some(q.pdf(scene, Some(pt), qm)),
-        _ => None,
+    let (pt_minus_rev, qs_rev) = match (qs, pt_minus) {
+        (Some(q), Some(pm)) => {
+            let (to_pm, to_q) = pt.pdf_pair(scene, q, pm);
+            (Some(to_pm), Some(to_q))
+        }
+        (Some(q), None) => (None, Some(pt.pdf(scene, None, q))),
+        (None, pm) => (pm.map(|pm| pt.pdf_light(scene, pm)), None),
     };
     // Camera side: vertex i's reverse density (overridden at t−1, t−2) and delta flag (the
     // connection vertex counts as non-delta).

@@ -155,6 +155,21 @@ impl Vertex {
         self.to_area(solid, next, scene)
     }
 
+    /// `(self.pdf(scene, Some(a), b), self.pdf(scene, Some(b), a))`, bit for bit, with the BSDF's
+    /// directions brought into its frame once for both (surface vertices; others take the two
+    /// calls).
+    pub fn pdf_pair(&self, scene: &Scene, a: &Vertex, b: &Vertex) -> (f64, f64) {
+        match (&self.kind, &self.bsdf) {
+            (VertexKind::Surface, Some(bsdf)) => {
+                let wa = (a.p() - self.p()).normalize_or_zero();
+                let wb = (b.p() - self.p()).normalize_or_zero();
+                let (to_b, to_a) = bsdf.pdf_pair(wa, wb);
+                (self.to_area(to_b, b, scene), self.to_area(to_a, a, scene))
+            }
+            _ => (self.pdf(scene, Some(a), b), self.pdf(scene, Some(b), a)),
+        }
+    }
+
     /// For a vertex on an emitter: area density at `next` of a light subpath leaving this point
     /// toward `next` (the emission direction density).
     pub fn pdf_light(&self, scene: &Scene, next: &Vertex) -> f64 {
