@@ -1883,7 +1883,8 @@ fn radiance_compression_is_the_ratio_of_radiance_to_importance_transport() {
     assert!(checked > 300, "{checked} samples checked");
 }
 
-/// `Bsdf::pdf_pair` is two `Bsdf::pdf` calls, bit for bit, on every configuration: random pairs
+/// `Bsdf::pdf_pair` is two `Bsdf::pdf` calls, and `Bsdf::pdf` the total of `Bsdf::lobe_weights`,
+/// bit for bit, on every configuration: random pairs
 /// of directions on both sides and pairs the BSDF samples itself (so that sharp lobes give
 /// nonzero densities).
 #[test]
@@ -1905,6 +1906,11 @@ fn pdf_pair_is_both_pdfs() {
             let (ab, ba) = b.pdf_pair(wa, wb);
             assert_eq!(ab.to_bits(), b.pdf(wa, wb).to_bits(), "{}", case.name);
             assert_eq!(ba.to_bits(), b.pdf(wb, wa).to_bits(), "{}", case.name);
+            // `pdf` (through `Bsdf::local_pair`) is the sum of the lobes' shares, as `invert`
+            // weighs them.
+            let total = b.lobe_weights(wa, wb, false).total();
+            let total = if total.is_finite() { total } else { 0.0 };
+            assert_eq!(ab.to_bits(), total.to_bits(), "{}", case.name);
             nonzero += usize::from(ab > 0.0 && ba > 0.0);
         }
     }

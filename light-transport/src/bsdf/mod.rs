@@ -131,6 +131,24 @@ impl LobeWeights {
     }
 }
 
+/// Two directions in a BSDF's local frame, normalised ([`Bsdf::local_pair`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LocalPair {
+    wo: DVec3,
+    wi: DVec3,
+}
+
+impl LocalPair {
+    /// The pair with `wo` and `wi` exchanged.
+    #[inline]
+    pub fn reversed(self) -> Self {
+        Self {
+            wo: self.wi,
+            wi: self.wo,
+        }
+    }
+}
+
 /// A BSDF at one surface point.
 #[derive(Clone, Debug)]
 pub struct Bsdf {
@@ -273,41 +291,53 @@ impl Bsdf {
         })
     }
 
+    /// `wo` and `wi` in the local frame, what [`Bsdf::eval`] and [`Bsdf::pdf`] compute first:
+    /// with [`Bsdf::eval_local`] and [`Bsdf::pdf_local`] a caller needing both computes it once.
+    /// `None` when either direction is degenerate or on a side the two normals disagree on (both
+    /// are then zero).
+    #[inline]
+    pub fn local_pair(&self, wo: DVec3, wi: DVec3) -> Option<LocalPair> {
+        self.locals(wo, wi).map(|(wo, wi)| LocalPair { wo, wi })
+    }
+
+    /// [`Bsdf::eval`] of the pair.
+    #[inline]
+    pub fn eval_local(&self, l: LocalPair, mode: TransportMode) -> Rgb {
+        let f = self.lobes.eval(l.wo, l.wi, mode);
+        if f.is_finite() { f } else { Rgb::BLACK }
+    }
+
+    /// [`Bsdf::pdf`] of the pair.
+    #[inline]
+    pub fn pdf_local(&self, l: LocalPair) -> f64 {
+        let p = self.lobes.probabilities(l.wo);
+        let terms = self.lobes.pdf_terms(&p, l.wo, l.wi);
+        let total: f64 = terms[..self.lobes.as_slice().len()]
+            .iter()
+            .map(|&w| if w.is_finite() { w } else { 0.0 })
+            .sum();
+        if total.is_finite() { total } else { 0.0 }
+    }
+
     /// Evaluate the non-delta part.
     pub fn eval(&self, wo: DVec3, wi: DVec3, mode: TransportMode) -> Rgb {
-        match self.locals(wo, wi) {
-            Some((wo, wi)) => {
-                let f = self.lobes.eval(wo, wi, mode);
-                if f.is_finite() { f } else { Rgb::BLACK }
-            }
-            None => Rgb::BLACK,
-        }
+        self.local_pair(wo, wi)
+            .map_or(Rgb::BLACK, |l| self.eval_local(l, mode))
     }
 
     /// Density of sampling `wi` from `wo` (non-delta part).
     pub fn pdf(&self, wo: DVec3, wi: DVec3) -> f64 {
-        let p = self.lobe_weights(wo, wi, false).total();
-        if p.is_finite() { p } else { 0.0 }
+        self.local_pair(wo, wi).map_or(0.0, |l| self.pdf_local(l))
     }
 
     /// `(pdf(a, b), pdf(b, a))`: both densities between two directions, bit for bit those of two
     /// [`Bsdf::pdf`] calls, with the directions brought into the local frame once (a connection's
     /// MIS weight needs both at each end: [`crate::path::mis_weight`]).
     pub fn pdf_pair(&self, a: DVec3, b: DVec3) -> (f64, f64) {
-        let Some((la, lb)) = self.locals(a, b) else {
+        let Some(l) = self.local_pair(a, b) else {
             return (0.0, 0.0);
         };
-        let one = |wo: DVec3, wi: DVec3| {
-            let p = self.lobes.probabilities(wo);
-            let terms = self.lobes.pdf_terms(&p, wo, wi);
-            let len = self.lobes.as_slice().len();
-            let total: f64 = terms[..len]
-                .iter()
-                .map(|&w| if w.is_finite() { w } else { 0.0 })
-                .sum();
-            if total.is_finite() { total } else { 0.0 }
-        };
-        (one(la, lb), one(lb, la))
+        (self.pdf_local(l), self.pdf_local(l.reversed()))
     }
 
     /// `(f, probability)` of the delta lobes producing `wi` from `wo`, as [`Bsdf::sample`] would

@@ -65,14 +65,17 @@ pub fn next_event(
             )
         }
     };
-    let f = bsdf.eval(wo, wi, TransportMode::Radiance);
+    // Value and (below) density from one change of frame.
+    let local = bsdf.local_pair(wo, wi);
+    let f = local.map_or(Rgb::BLACK, |l| bsdf.eval_local(l, TransportMode::Radiance));
     if le.is_black() || f.is_black() || !pdf_solid.is_finite() || !(pdf_solid > 0.0) {
         return Rgb::BLACK;
     }
     let w = if delta {
         1.0
     } else {
-        mis(pdf_solid, bsdf_samples * bsdf.pdf(wo, wi), heuristic)
+        let pdf_bsdf = local.map_or(0.0, |l| bsdf.pdf_local(l));
+        mis(pdf_solid, bsdf_samples * pdf_bsdf, heuristic)
     };
     let value = f * le * (wi.dot(p.ns).abs() * w / pdf_solid);
     if value.is_black() {

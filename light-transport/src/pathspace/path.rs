@@ -304,9 +304,11 @@ pub fn walk<'a>(
                 None => return i + 1,
             }
         } else {
-            let f = b.eval(wo, wi, mode);
+            // Value and density from one change of frame.
+            let local = b.local_pair(wo, wi);
+            let f = local.map_or(Rgb::BLACK, |l| b.eval_local(l, mode));
             out[i].f_next = f * shading;
-            (f, b.pdf(wo, wi))
+            (f, local.map_or(0.0, |l| b.pdf_local(l)))
         };
         if !(pdf > 0.0) {
             return i + 1;
