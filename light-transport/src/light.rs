@@ -110,6 +110,23 @@ impl LightKind {
         }
     }
 
+    /// Position and normal of [`LightKind::sample_point`]'s point, with its density: what
+    /// next-event estimation needs, without the point's texture coordinates and derivatives.
+    pub fn sample_position(&self, prims: &[Primitive], u: [f64; 2]) -> Option<(DVec3, DVec3, f64)> {
+        match *self {
+            LightKind::Area {
+                primitive, area, ..
+            } => {
+                let (p, n) = match prims.get(primitive as usize)? {
+                    Primitive::Triangle(t) => t.sample_position(u),
+                    Primitive::Sphere(s) => s.sample_position(u),
+                };
+                Some((p, n, 1.0 / area))
+            }
+            LightKind::Point { position, .. } => Some((position, DVec3::Z, 1.0)),
+        }
+    }
+
     /// Sample an emitted ray from the position numbers `u_pos` and direction numbers `u_dir`.
     pub fn sample_emission(
         &self,
@@ -330,6 +347,66 @@ impl LightDistribution {
 mod tests {
     use super::*;
     use crate::geometry::{NO_SHADING, Sphere, Triangle};
+
+    /// Next-event estimation's `sample_position` is `sample_point`'s position, normal and density,
+    /// bit for bit, on triangles and spheres facing either way and on point lights.
+    #[test]
+    fn sample_position_is_sample_points() {
+        let prims = vec![
+            Primitive::Triangle(Triangle {
+                p: [
+                    DVec3::new(0.1, 0.2, 0.3),
+                    DVec3::new(1.7, -0.4, 0.2),
+                    DVec3::Y,
+                ],
+                uv: [[0.0; 2], [0.3, 0.9], [0.7, 0.1]],
+                flip: false,
+                shading: NO_SHADING,
+            }),
+            Primitive::Triangle(Triangle {
+                p: [DVec3::ZERO, DVec3::X, DVec3::new(0.2, 0.9, -0.4)],
+                uv: [[0.0; 2]; 3],
+                flip: true,
+                shading: NO_SHADING,
+            }),
+            Primitive::Sphere(Sphere {
+                center: DVec3::new(3.0, -1.0, 0.5),
+                radius: 0.7,
+                flip: false,
+            }),
+            Primitive::Sphere(Sphere {
+                center: DVec3::new(-2.0, 0.0, 1.0),
+                radius: 1.3,
+                flip: true,
+            }),
+        ];
+        let mut lights: Vec<LightKind> = (0..prims.len() as u32)
+            .map(|primitive| LightKind::Area {
+                primitive,
+                radiance: Rgb::WHITE,
+                two_sided: false,
+                area: 0.25 + f64::from(primitive),
+            })
+            .collect();
+        lights.push(LightKind::Point {
+            position: DVec3::new(0.5, 2.0, -1.0),
+            intensity: Rgb::WHITE,
+        });
+        let mut rng = mcmc_core::rng::stream(5, 0);
+        for light in &lights {
+            for _ in 0..1000 {
+                let u = [
+                    mcmc_core::rng::uniform(&mut rng),
+                    mcmc_core::rng::uniform(&mut rng),
+                ];
+                let (point, pdf) = light.sample_point(&prims, u).expect("a point");
+                let (p, n, pdf_p) = light.sample_position(&prims, u).expect("a position");
+                let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+                assert_eq!((bits(p), bits(n)), (bits(point.p), bits(point.n)));
+                assert_eq!(pdf.to_bits(), pdf_p.to_bits());
+            }
+        }
+    }
 
     #[test]
     fn emission_inverts() {

@@ -55,8 +55,7 @@ impl Sphere {
     /// `∂p/∂u = 2π (−y, x, 0)`, `∂p/∂v = π (z cos φ, z sin φ, −r sin θ)` relative to the centre,
     /// and `∂n/∂u = ±∂p/∂u / r`, `∂n/∂v = ±∂p/∂v / r` (the normal is the scaled position).
     pub fn point(&self, p: DVec3, primitive: u32) -> SurfacePoint {
-        let n = (p - self.center).normalize();
-        let p = self.center + n * self.radius;
+        let (p, n) = self.project(p);
         let phi = crate::math::phi(n);
         let cos_theta = n.z.clamp(-1.0, 1.0);
         let uv = [phi / (2.0 * PI), cos_theta.acos() / PI];
@@ -82,15 +81,33 @@ impl Sphere {
         }
     }
 
+    /// `p` moved onto the sphere along its outward normal, and that normal (unflipped).
+    #[inline]
+    fn project(&self, p: DVec3) -> (DVec3, DVec3) {
+        let n = (p - self.center).normalize();
+        (self.center + n * self.radius, n)
+    }
+
     /// Uniform area sampling.
     pub fn sample(&self, u: [f64; 2], primitive: u32) -> SurfacePoint {
+        self.point(self.sample_raw(u), primitive)
+    }
+
+    /// Position and normal of [`Sphere::sample`]'s point, without the rest of the surface point
+    /// (its texture coordinates and derivatives take trigonometry).
+    pub fn sample_position(&self, u: [f64; 2]) -> (DVec3, DVec3) {
+        let (p, n) = self.project(self.sample_raw(u));
+        let sign = if self.flip { -1.0 } else { 1.0 };
+        (p, n * sign)
+    }
+
+    /// The point uniform area sampling maps `u` to, before [`Sphere::point`] projects it.
+    #[inline]
+    fn sample_raw(&self, u: [f64; 2]) -> DVec3 {
         let z = 1.0 - 2.0 * u[0];
         let r = (1.0 - z * z).max(0.0).sqrt();
         let phi = 2.0 * PI * u[1];
-        self.point(
-            self.center + DVec3::new(r * phi.cos(), r * phi.sin(), z) * self.radius,
-            primitive,
-        )
+        self.center + DVec3::new(r * phi.cos(), r * phi.sin(), z) * self.radius
     }
 
     /// The numbers [`Sphere::sample`] maps to the point `p` on the sphere.

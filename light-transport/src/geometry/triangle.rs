@@ -82,6 +82,17 @@ impl Triangle {
         self.point_shaded(b1, b2, primitive, None)
     }
 
+    /// Position and geometric normal at barycentrics `(b1, b2)`: [`Triangle::point`]'s, without
+    /// the rest of the surface point.
+    #[inline]
+    pub fn position(&self, b1: f64, b2: f64) -> (DVec3, DVec3) {
+        let b0 = 1.0 - b1 - b2;
+        (
+            self.p[0] * b0 + self.p[1] * b1 + self.p[2] * b2,
+            self.normal(),
+        )
+    }
+
     /// The surface point at barycentrics `(b1, b2)` with the triangle's shading data.
     pub fn point_shaded(
         &self,
@@ -90,14 +101,13 @@ impl Triangle {
         primitive: u32,
         shading: Option<&TriangleShading>,
     ) -> SurfacePoint {
+        let (p, n) = self.position(b1, b2);
         let b0 = 1.0 - b1 - b2;
-        let p = self.p[0] * b0 + self.p[1] * b1 + self.p[2] * b2;
         let t = self.uv.map(|[u, v]| [f64::from(u), f64::from(v)]);
         let uv = [
             t[0][0] * b0 + t[1][0] * b1 + t[2][0] * b2,
             t[0][1] * b0 + t[1][1] * b1 + t[2][1] * b2,
         ];
-        let n = self.normal();
         let (e1, e2) = (self.p[1] - self.p[0], self.p[2] - self.p[0]);
         // d(b1, b2)/d(u, v): the inverse of the uv edge matrix (barycentrics themselves where the
         // texture coordinates are degenerate).
@@ -153,8 +163,21 @@ impl Triangle {
     /// Uniform area sampling: barycentrics from two numbers (the square-root warp
     /// `b1 = 1 − √u0`, `b2 = u1 √u0`), bijective on the unit square's interior.
     pub fn sample(&self, u: [f64; 2], primitive: u32) -> SurfacePoint {
+        let (b1, b2) = Self::sample_barycentrics(u);
+        self.point(b1, b2, primitive)
+    }
+
+    /// Position and normal of [`Triangle::sample`]'s point.
+    pub fn sample_position(&self, u: [f64; 2]) -> (DVec3, DVec3) {
+        let (b1, b2) = Self::sample_barycentrics(u);
+        self.position(b1, b2)
+    }
+
+    /// The barycentrics `(b1, b2)` uniform area sampling maps `u` to.
+    #[inline]
+    fn sample_barycentrics(u: [f64; 2]) -> (f64, f64) {
         let s = u[0].sqrt();
-        self.point(1.0 - s, u[1] * s, primitive)
+        (1.0 - s, u[1] * s)
     }
 
     /// The numbers that [`Triangle::sample`] maps to the point with barycentrics `(b1, b2)`.

@@ -45,10 +45,10 @@ pub fn next_event(
         return Rgb::BLACK;
     };
     let light = &scene.lights[li];
-    let Some((lp, pdf_area)) = light.sample_point(&scene.bvh.primitives, u_light) else {
+    let Some((lp, ln, pdf_area)) = light.sample_position(&scene.bvh.primitives, u_light) else {
         return Rgb::BLACK;
     };
-    let d = lp.p - p.p;
+    let d = lp - p.p;
     let dist2 = d.length_squared();
     if !(dist2 > 0.0) {
         return Rgb::BLACK;
@@ -57,9 +57,9 @@ pub fn next_event(
     let (le, pdf_solid, delta) = match light {
         LightKind::Point { intensity, .. } => (*intensity, p_choice * dist2, true),
         _ => {
-            let cos_l = lp.n.dot(-wi).abs();
+            let cos_l = ln.dot(-wi).abs();
             (
-                light.radiance(lp.n, -wi),
+                light.radiance(ln, -wi),
                 p_choice * pdf_area * dist2 / cos_l,
                 false,
             )
@@ -84,8 +84,8 @@ pub fn next_event(
     let Some(boost) = survive(value) else {
         return Rgb::BLACK;
     };
-    let light_normal = if delta { None } else { Some(lp.n) };
-    if !scene.visible(p.p, Some(p.n), lp.p, light_normal) {
+    let light_normal = if delta { None } else { Some(ln) };
+    if !scene.visible(p.p, Some(p.n), lp, light_normal) {
         return Rgb::BLACK;
     }
     value * boost
