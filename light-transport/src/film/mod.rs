@@ -190,14 +190,13 @@ impl Film {
             }
         }
         if !o.splat_sum.is_empty() {
-            let splats = self.splats_mut();
-            for (a, b) in splats.iter_mut().zip(&o.splat_sum) {
+            for (a, b) in self.splats_mut().iter_mut().zip(&o.splat_sum) {
                 *a += *b;
             }
-            for l in o.corrected_layers() {
-                for (i, a) in splats.iter_mut().enumerate() {
-                    *a += l.correction(i);
-                }
+        }
+        for l in o.corrected_layers() {
+            for (i, a) in self.splats_mut().iter_mut().enumerate() {
+                *a += l.correction(i);
             }
         }
         self.splat_scale += o.splat_scale;
@@ -212,20 +211,10 @@ impl Film {
             std::mem::swap(&mut self.pixel_sum, &mut o.pixel_sum);
             std::mem::swap(&mut self.pixel_count, &mut o.pixel_count);
         }
-        if self.splat_sum.is_empty() && !o.splat_sum.is_empty() {
-            self.splat_sum = std::mem::take(&mut o.splat_sum);
-            for l in o.corrected_layers() {
-                for (i, a) in self.splat_sum.iter_mut().enumerate() {
-                    *a += l.correction(i);
-                }
-            }
-            self.splat_scale += o.splat_scale;
-            self.discarded += o.discarded;
-            // `o` keeps no splats: merging the rest adds its scale and count once more.
-            o.splat_scale = 0.0;
-            o.discarded = 0;
-            o.layers.clear();
+        if self.splat_sum.is_empty() {
+            std::mem::swap(&mut self.splat_sum, &mut o.splat_sum);
         }
+        // What is left of `o`: its buffers where this film had its own, its layers' corrections.
         self.merge(&o);
     }
 
@@ -333,14 +322,6 @@ impl FilmView<'_> {
                 height: a.height,
                 pixels: a.merged_image(b),
             },
-        }
-    }
-
-    /// Samples rejected as NaN or infinite so far.
-    pub fn discarded(&self) -> u64 {
-        match *self {
-            FilmView::One(f) => f.discarded,
-            FilmView::Merged(a, b) => a.discarded + b.discarded,
         }
     }
 }
