@@ -498,3 +498,25 @@ fn erpt_without_mis_on_seeds_is_caught() {
     println!("ERPT without MIS: p = {p:.3e}");
     assert!(p < ALPHA, "ERPT without MIS was not caught (p = {p:.2e})");
 }
+
+/// Copying a path state into a candidate (`clone_from`, what charted MLT's moves do) gives the
+/// clone, and keeps the candidate's vertex list when it is long enough.
+#[test]
+fn path_state_clone_from_is_clone_in_place() {
+    use light_transport::sampler::IndependentStream;
+    let scene = scene("cornell");
+    let sample = |k: usize, seed: u64| {
+        (0..1000u64)
+            .find_map(|tries| {
+                let mut s = IndependentStream::new(mcmc_core::rng::stream(seed, tries));
+                let mut st = PathState::default();
+                NewPath::sample(&scene, ImportanceKind::Luminance, k, &mut s, &mut st).then_some(st)
+            })
+            .unwrap()
+    };
+    let (x, mut y) = (sample(3, 1), sample(5, 2));
+    let storage = y.path.vertices.as_ptr();
+    y.clone_from(&x);
+    assert_eq!(format!("{y:?}"), format!("{:?}", x.clone()));
+    assert_eq!(y.path.vertices.as_ptr(), storage, "reallocated");
+}

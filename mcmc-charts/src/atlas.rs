@@ -10,7 +10,7 @@ use mcmc_core::ChainRng;
 
 /// A chain state of charted Metropolis–Hastings: a chart index, its primary coordinates, and the
 /// cached target-space point with what was evaluated there.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Debug, Default, PartialEq)]
 pub struct ChartState<X> {
     /// Index of the chart the state lives in ([`Atlas::identity`] for target space).
     pub chart: usize,
@@ -26,6 +26,32 @@ pub struct ChartState<X> {
     pub importance: f64,
     /// `ln p_k(x)` for every chart `k` of the atlas (0 for the identity chart).
     pub ln_p: Vec<f64>,
+}
+
+impl<X: Clone> Clone for ChartState<X> {
+    fn clone(&self) -> Self {
+        Self {
+            chart: self.chart,
+            u: self.u.clone(),
+            x: self.x.clone(),
+            valid: self.valid,
+            fresh: self.fresh,
+            importance: self.importance,
+            ln_p: self.ln_p.clone(),
+        }
+    }
+
+    /// Field by field, so that a move copying the current state into the chain's candidate
+    /// reuses the candidate's storage (`u`, `ln_p` and whatever `X::clone_from` keeps).
+    fn clone_from(&mut self, source: &Self) {
+        self.chart = source.chart;
+        self.u.clone_from(&source.u);
+        self.x.clone_from(&source.x);
+        self.valid = source.valid;
+        self.fresh = source.fresh;
+        self.importance = source.importance;
+        self.ln_p.clone_from(&source.ln_p);
+    }
 }
 
 impl<X: Default> ChartState<X> {
@@ -229,6 +255,27 @@ impl<X, C: Chart<X>> Atlas<X, C> {
 #[cfg(test)]
 mod tests {
     use super::ChartState;
+
+    /// Copying the current state into a candidate is a clone that keeps the candidate's storage.
+    #[test]
+    fn clone_from_is_clone_in_the_candidates_storage() {
+        let x = ChartState {
+            chart: 2,
+            u: vec![0.1, 0.2, 0.3],
+            x: vec![4.0, 5.0],
+            valid: true,
+            fresh: true,
+            importance: 0.7,
+            ln_p: vec![-1.0, -2.0, -3.0],
+        };
+        let mut y = ChartState::<Vec<f64>>::in_chart(1, vec![0.9; 8]);
+        y.x = vec![0.0; 6];
+        y.ln_p = vec![0.0; 5];
+        let (u, p, ln_p) = (y.u.as_ptr(), y.x.as_ptr(), y.ln_p.as_ptr());
+        y.clone_from(&x);
+        assert_eq!(y, x.clone());
+        assert_eq!((y.u.as_ptr(), y.x.as_ptr(), y.ln_p.as_ptr()), (u, p, ln_p));
+    }
 
     /// A moved state is the fresh state `in_chart` makes, whatever it held before, but for its
     /// (stale) point.

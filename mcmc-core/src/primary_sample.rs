@@ -20,17 +20,33 @@ use crate::rng::uniform;
 use crate::{ChainRng, McmcError, Proposal, Proposed};
 use rand::{Rng, SeedableRng};
 
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 struct Stream {
     values: Vec<f64>,
     modified: Vec<u64>,
+}
+
+impl Clone for Stream {
+    fn clone(&self) -> Self {
+        Self {
+            values: self.values.clone(),
+            modified: self.modified.clone(),
+        }
+    }
+
+    /// Field by field, so that a candidate copied from the current state at every proposal
+    /// keeps its vectors' storage (a derived `clone_from` would allocate both anew).
+    fn clone_from(&mut self, source: &Self) {
+        self.values.clone_from(&source.values);
+        self.modified.clone_from(&source.modified);
+    }
 }
 
 /// Coordinates a stream makes room for when its first one is read.
 const FIRST_CAPACITY: usize = 32;
 
 /// A point of primary sample space with lazily created coordinates in several streams.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct PrimarySample {
     streams: Vec<Stream>,
     /// Iteration (proposal count) this state belongs to.
@@ -41,6 +57,30 @@ pub struct PrimarySample {
     large: bool,
     step: SmallStep,
     rng: ChainRng,
+}
+
+impl Clone for PrimarySample {
+    fn clone(&self) -> Self {
+        Self {
+            streams: self.streams.clone(),
+            iteration: self.iteration,
+            last_large: self.last_large,
+            large: self.large,
+            step: self.step,
+            rng: self.rng.clone(),
+        }
+    }
+
+    /// Field by field, reusing the streams' storage: [`Kelemen`] copies the current state into
+    /// the chain's candidate at every proposal.
+    fn clone_from(&mut self, source: &Self) {
+        self.streams.clone_from(&source.streams);
+        self.iteration = source.iteration;
+        self.last_large = source.last_large;
+        self.large = source.large;
+        self.step = source.step;
+        self.rng.clone_from(&source.rng);
+    }
 }
 
 impl PrimarySample {
@@ -224,6 +264,39 @@ impl Proposal<PrimarySample> for Kelemen {
 mod tests {
     use super::*;
     use crate::rng::stream;
+
+    /// A proposal copies the current state into the chain's candidate: that copy keeps the
+    /// candidate's storage (no allocation per proposal) and is the state, down to the numbers
+    /// its lazy coordinates will still draw.
+    #[test]
+    fn clone_from_keeps_the_candidate_storage() {
+        let k = Kelemen::default();
+        let mut rng = stream(9, 0);
+        let mut x = PrimarySample::new(3, SmallStep::default(), 1).unwrap();
+        let mut y = PrimarySample::new(3, SmallStep::default(), 2).unwrap();
+        for i in 0..40 {
+            y.get(0, i);
+        }
+        for _ in 0..5 {
+            k.propose(&x.clone(), &mut x, &mut rng);
+            for i in 0..(10 + rng.next_u64() % 20) as usize {
+                x.get((i % 3) as usize, i);
+            }
+            let storage = y.streams[0].values.as_ptr();
+            y.clone_from(&x);
+            assert_eq!(y.streams[0].values.as_ptr(), storage, "reallocated");
+            for s in 0..3 {
+                assert_eq!(y.raw(s), x.raw(s));
+                assert_eq!(y.streams[s].modified, x.streams[s].modified);
+            }
+            assert_eq!(
+                (y.iteration, y.last_large, y.large, y.step),
+                (x.iteration, x.last_large, x.large, x.step)
+            );
+            // The generators agree: both draw the same new coordinates.
+            assert_eq!(x.clone().get(2, 60), y.get(2, 60));
+        }
+    }
 
     #[test]
     fn coordinates_are_stable_until_proposed() {

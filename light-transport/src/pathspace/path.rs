@@ -15,12 +15,25 @@ use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
 /// A full path.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub struct FullPath {
     /// Vertices from the light endpoint (`v_0`, kind [`VertexKind::Light`]) to the lens point
     /// (`v_k`, kind [`VertexKind::Camera`]); the scattering vertices in between carry their BSDF
     /// and whether they scatter through a delta lobe (`delta`).
     pub vertices: Vec<Vertex>,
+}
+
+impl Clone for FullPath {
+    fn clone(&self) -> Self {
+        Self {
+            vertices: self.vertices.clone(),
+        }
+    }
+
+    /// Keeps the vertex list's storage (a derived `clone_from` would allocate it anew).
+    fn clone_from(&mut self, source: &Self) {
+        self.vertices.clone_from(&source.vertices);
+    }
 }
 
 /// Scratch space for evaluating paths (kept per thread to avoid allocation).

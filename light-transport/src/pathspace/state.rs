@@ -61,7 +61,7 @@ impl SuitabilityCache {
 }
 
 /// A path-space chain state.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub struct PathState {
     /// The path.
     pub path: FullPath,
@@ -74,6 +74,31 @@ pub struct PathState {
     pub change: Option<Change>,
     /// The registered mutations' suitabilities for this path (filled on use).
     pub suitability: SuitabilityCache,
+}
+
+impl Clone for PathState {
+    fn clone(&self) -> Self {
+        Self {
+            path: self.path.clone(),
+            strategy: self.strategy.clone(),
+            contribution: self.contribution.clone(),
+            change: self.change,
+            suitability: self.suitability.clone(),
+        }
+    }
+
+    /// Field by field, keeping the vectors' storage: charted MLT's moves copy the current state
+    /// into the chain's candidate.
+    fn clone_from(&mut self, source: &Self) {
+        self.path.clone_from(&source.path);
+        self.strategy.clone_from(&source.strategy);
+        self.contribution
+            .splats
+            .clone_from(&source.contribution.splats);
+        self.contribution.importance = source.contribution.importance;
+        self.change = source.change;
+        self.suitability.clone_from(&source.suitability);
+    }
 }
 
 impl Recordable for PathState {
