@@ -280,7 +280,7 @@ mod tests {
         for _ in 0..5 {
             k.propose(&x.clone(), &mut x, &mut rng);
             for i in 0..(10 + rng.next_u64() % 20) as usize {
-                x.get((i % 3) as usize, i);
+                x.get(i % 3, i);
             }
             let storage = y.streams[0].values.as_ptr();
             y.clone_from(&x);
