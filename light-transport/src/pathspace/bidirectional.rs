@@ -27,10 +27,9 @@
 
 use super::mutation::{Change, Mutation, Registration};
 use super::state::PathState;
-use super::walk::{extend, lens_endpoint, light_endpoint};
+use super::walk::{extend, lens_endpoint, light_endpoint, with_vertex_buffers};
 use crate::bsdf::TransportMode;
 use crate::metropolis::ImportanceKind;
-use crate::path::Vertex;
 use crate::scene::Scene;
 use mcmc_core::rng::{uniform, uniform_index};
 use mcmc_core::{ChainRng, Failure};
@@ -222,49 +221,46 @@ impl Bidirectional {
         let splits = Self::splits(k, d, n);
         let a = uniform_index(uniform(rng), splits);
         let b = n - a;
-        // Light part.
-        let mut light: Vec<Vertex> = Vec::with_capacity(k + n);
-        if d.l >= 0 {
-            light.extend_from_slice(&xp.vertices[..=d.l as usize]);
-            if !extend(scene, &mut light, a, TransportMode::Importance, rng) {
-                return Err(Failure::Failed);
+        with_vertex_buffers(|light, cam| {
+            // Light part.
+            if d.l >= 0 {
+                light.extend_from_slice(&xp.vertices[..=d.l as usize]);
+                if !extend(scene, light, a, TransportMode::Importance, rng) {
+                    return Err(Failure::Failed);
+                }
+            } else if a > 0 {
+                light.push(light_endpoint(scene, rng).ok_or(Failure::Failed)?);
+                if !extend(scene, light, a - 1, TransportMode::Importance, rng) {
+                    return Err(Failure::Failed);
+                }
             }
-        } else if a > 0 {
-            light.push(light_endpoint(scene, rng).ok_or(Failure::Failed)?);
-            if !extend(scene, &mut light, a - 1, TransportMode::Importance, rng) {
-                return Err(Failure::Failed);
+            // Camera part (walk order: lens first).
+            if d.m <= k {
+                cam.extend(xp.vertices[d.m..].iter().rev().cloned());
+                if !extend(scene, cam, b, TransportMode::Radiance, rng) {
+                    return Err(Failure::Failed);
+                }
+            } else {
+                cam.push(lens_endpoint(scene, rng).ok_or(Failure::Failed)?);
+                if !extend(scene, cam, b - 1, TransportMode::Radiance, rng) {
+                    return Err(Failure::Failed);
+                }
             }
-        }
-        // Camera part (walk order: lens first).
-        let mut cam: Vec<Vertex> = Vec::with_capacity(k + n);
-        if d.m <= k {
-            cam.extend(xp.vertices[d.m..].iter().rev().cloned());
-            if !extend(scene, &mut cam, b, TransportMode::Radiance, rng) {
-                return Err(Failure::Failed);
+            let change = Change {
+                l: d.l,
+                m: d.m,
+                added: n,
+                pivot: 0,
+            };
+            let (s, t) = (light.len(), cam.len());
+            if y.path.set_from_subpaths(scene, light, cam, s, t).is_some() {
+                y.finish_candidate(scene, importance, change, s);
+            } else {
+                y.change = Some(change);
+                y.discard();
             }
-        } else {
-            cam.push(lens_endpoint(scene, rng).ok_or(Failure::Failed)?);
-            if !extend(scene, &mut cam, b - 1, TransportMode::Radiance, rng) {
-                return Err(Failure::Failed);
-            }
-        }
-        let change = Change {
-            l: d.l,
-            m: d.m,
-            added: n,
-            pivot: 0,
-        };
-        let (s, t) = (light.len(), cam.len());
-        if y.path
-            .set_from_subpaths(scene, &light, &cam, s, t)
-            .is_some()
-        {
-            y.finish_candidate(scene, importance, change, s);
-        } else {
-            y.change = Some(change);
-            y.discard();
-        }
-        Ok(())
+            Ok(())
+        })
     }
 
     /// `ln T̃` of making `y` from `x` by the change `c` (module docs; `−∞` when no deletion and

@@ -26,7 +26,9 @@
 
 use super::path::FullPath;
 use super::state::PathState;
-use super::walk::{angular_offset, exponential_radius_pdf, pixel_offset, trace};
+use super::walk::{
+    angular_offset, exponential_radius_pdf, pixel_offset, trace, with_vertex_buffers,
+};
 use crate::bsdf::TransportMode;
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
@@ -295,50 +297,52 @@ pub fn camera_side_propose(
         .ray_through(lens.p(), moved)
         .ok_or(Failure::Failed)?;
     // New vertices in camera order: lens, v'_{k−1}, v'_{k−2}, …
-    let mut cam: Vec<Vertex> = Vec::with_capacity(k + 1);
-    cam.push(lens);
-    let mut w = cs.ray.d;
-    let mut i = k - 1;
-    loop {
-        let mut v = trace(scene, cam.last().ok_or(Failure::Failed)?, w).ok_or(Failure::Failed)?;
-        if xp.specular(i) {
-            w = follow_specular(&mut v, xp, i, TransportMode::Radiance)?;
-            cam.push(v);
-            i -= 1;
-            continue;
-        }
-        if i == 0 {
-            // The chain ends on the light: the hit must be an area light (strategy s = 0).
-            let (li, light) = scene.light_at(v.point.primitive).ok_or(Failure::Failed)?;
-            if light.is_delta_position() {
+    with_vertex_buffers(|cam, _| {
+        cam.push(lens);
+        let mut w = cs.ray.d;
+        let mut i = k - 1;
+        loop {
+            let mut v =
+                trace(scene, cam.last().ok_or(Failure::Failed)?, w).ok_or(Failure::Failed)?;
+            if xp.specular(i) {
+                w = follow_specular(&mut v, xp, i, TransportMode::Radiance)?;
+                cam.push(v);
+                i -= 1;
+                continue;
+            }
+            if i == 0 {
+                // The chain ends on the light: the hit must be an area light (strategy s = 0).
+                let (li, light) = scene.light_at(v.point.primitive).ok_or(Failure::Failed)?;
+                if light.is_delta_position() {
+                    return Err(Failure::Failed);
+                }
+                v.kind = VertexKind::Light { light: li as u32 };
+                cam.push(v);
+                break;
+            }
+            if !scatters_diffusely(&v) {
                 return Err(Failure::Failed);
             }
-            v.kind = VertexKind::Light { light: li as u32 };
+            if i == chain.s {
+                cam.push(v);
+                break;
+            }
+            // Multi-chain: offset the direction leaving this vertex toward the next chain.
+            let w_x = direction(&xp.vertices[i], &xp.vertices[i - 1]);
+            w = angular_offset(w_x, settings.theta1, settings.theta2, rng);
             cam.push(v);
-            break;
+            i -= 1;
         }
-        if !scatters_diffusely(&v) {
-            return Err(Failure::Failed);
-        }
-        if i == chain.s {
-            cam.push(v);
-            break;
-        }
-        // Multi-chain: offset the direction leaving this vertex toward the next chain.
-        let w_x = direction(&xp.vertices[i], &xp.vertices[i - 1]);
-        w = angular_offset(w_x, settings.theta1, settings.theta2, rng);
-        cam.push(v);
-        i -= 1;
-    }
-    // ȳ = kept light part v_0 … v_{s−1}, then the new camera part reversed.
-    let s = chain.s;
-    let yp = &mut y.path;
-    yp.vertices.clear();
-    yp.vertices.extend_from_slice(&xp.vertices[..s]);
-    yp.vertices.extend(cam.into_iter().rev());
-    yp.vertices[s].delta = false;
-    y.finish_candidate(scene, importance, chain.change(k), s);
-    Ok(())
+        // ȳ = kept light part v_0 … v_{s−1}, then the new camera part reversed.
+        let s = chain.s;
+        let yp = &mut y.path;
+        yp.vertices.clear();
+        yp.vertices.extend_from_slice(&xp.vertices[..s]);
+        yp.vertices.extend(cam.drain(..).rev());
+        yp.vertices[s].delta = false;
+        y.finish_candidate(scene, importance, chain.change(k), s);
+        Ok(())
+    })
 }
 
 /// `ln T̃` of a camera-side perturbation making `y` from `x` with record `c` (module docs).

@@ -215,6 +215,24 @@ pub fn cone_pdf(axis: DVec3, w: DVec3, beta: f64) -> f64 {
     }
 }
 
+/// Run `f` with two empty vertex lists whose storage is kept per thread: the mutations that build
+/// a candidate's new vertices in lists of their own (the bidirectional mutation's two subpaths, a
+/// perturbation's camera side) would otherwise allocate them at every proposal. The lists are
+/// taken out of the thread's slot for the call, so a nested call gets fresh ones instead of
+/// failing.
+pub fn with_vertex_buffers<R>(f: impl FnOnce(&mut Vec<Vertex>, &mut Vec<Vertex>) -> R) -> R {
+    thread_local! {
+        static LISTS: std::cell::Cell<(Vec<Vertex>, Vec<Vertex>)> =
+            const { std::cell::Cell::new((Vec::new(), Vec::new())) };
+    }
+    let (mut a, mut b) = LISTS.take();
+    a.clear();
+    b.clear();
+    let r = f(&mut a, &mut b);
+    LISTS.set((a, b));
+    r
+}
+
 /// Sample a whole path of `k` edges by strategy `s` (light vertices) from `stream`, as BDPT would
 /// (the connection is tested for visibility); `None` when the subpaths fall short or the
 /// connection carries nothing. The path is not evaluated. The two subpaths are walked in buffers
@@ -241,4 +259,37 @@ pub fn sample_path<S: SampleStream>(
         connect(scene, light, cam, s, t)?;
         out.path.set_from_subpaths(scene, light, cam, s, t)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{endpoint, with_vertex_buffers};
+    use crate::geometry::SurfacePoint;
+    use crate::math::DVec3;
+    use crate::path::VertexKind;
+
+    /// The lists come empty, keep their storage from one call to the next on a thread, and a
+    /// nested call gets lists of its own rather than a borrow failure.
+    #[test]
+    fn vertex_buffers_are_empty_kept_and_nestable() {
+        let v = endpoint(
+            VertexKind::Camera,
+            SurfacePoint::flat(DVec3::ZERO, DVec3::Z, 0),
+        );
+        let storage = with_vertex_buffers(|a, b| {
+            a.extend(std::iter::repeat_n(v.clone(), 5));
+            b.push(v.clone());
+            let inner = with_vertex_buffers(|c, d| {
+                assert!(c.is_empty() && d.is_empty());
+                c.push(v.clone());
+                c.as_ptr()
+            });
+            assert_ne!(inner, a.as_ptr());
+            a.as_ptr()
+        });
+        with_vertex_buffers(|a, b| {
+            assert!(a.is_empty() && b.is_empty());
+            assert_eq!(a.as_ptr(), storage);
+        });
+    }
 }

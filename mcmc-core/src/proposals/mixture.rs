@@ -21,6 +21,12 @@
 
 use crate::error::check_positive;
 use crate::{ChainRng, Failure, McmcError, Outcome, Proposal, Proposed, rng::uniform};
+use smallvec::SmallVec;
+
+/// One number per component, on the stack for mixtures of up to 16 (a proposal's selection
+/// probabilities and density terms are computed at every step; on the heap they cost an
+/// allocation each).
+type PerComponent = SmallVec<[f64; 16]>;
 
 /// Which transition-density rule a [`Mixture`] reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -157,10 +163,15 @@ impl<'a, S> Mixture<'a, S> {
 
     /// `ln P_k(x)` for every component (all `-inf` when no component suits `x`).
     pub fn ln_selection(&self, x: &S) -> Vec<f64> {
+        self.ln_selection_in(x).into_vec()
+    }
+
+    /// [`Mixture::ln_selection`] on the stack (the acceptance ratio asks for it twice a step).
+    fn ln_selection_in(&self, x: &S) -> PerComponent {
         match self.selection {
-            Selection::Fixed => self.ln_weights.clone(),
+            Selection::Fixed => PerComponent::from_slice(&self.ln_weights),
             Selection::Suitability => {
-                let w: Vec<f64> = self
+                let w: PerComponent = self
                     .components
                     .iter()
                     .zip(&self.ln_weights)
@@ -190,7 +201,7 @@ impl<'a, S> Mixture<'a, S> {
 
     /// `w_k s_k(x)` for every component under suitability selection (`None` under fixed
     /// selection, where the normalised base weights are the probabilities).
-    fn suited(&self, x: &S) -> Option<Vec<f64>> {
+    fn suited(&self, x: &S) -> Option<PerComponent> {
         match self.selection {
             Selection::Fixed => None,
             Selection::Suitability => Some(
@@ -226,8 +237,8 @@ impl<'a, S> Mixture<'a, S> {
 
     /// `ln Σ_k P_k(from) q_k(to|from)`, or `None` when a component cannot evaluate it.
     pub fn ln_mixture_density(&self, from: &S, to: &S) -> Option<f64> {
-        let ln_p = self.ln_selection(from);
-        let mut terms = Vec::with_capacity(self.components.len());
+        let ln_p = self.ln_selection_in(from);
+        let mut terms = PerComponent::new();
         for (c, lw) in self.components.iter().zip(&ln_p) {
             terms.push(lw + c.ln_transition_density(from, to)?);
         }
@@ -237,9 +248,8 @@ impl<'a, S> Mixture<'a, S> {
     /// `(ln Σ_k P_k(x) q_k(y|x), ln Σ_k P_k(y) q_k(x|y))` for a candidate `y` proposed from `x`
     /// (through [`Proposal::ln_pair_densities`], so records carried by `y` are honoured).
     pub fn ln_mixture_pair(&self, x: &S, y: &S) -> Option<(f64, f64)> {
-        let (px, py) = (self.ln_selection(x), self.ln_selection(y));
-        let mut fwd = Vec::with_capacity(self.components.len());
-        let mut rev = Vec::with_capacity(self.components.len());
+        let (px, py) = (self.ln_selection_in(x), self.ln_selection_in(y));
+        let (mut fwd, mut rev) = (PerComponent::new(), PerComponent::new());
         for (k, c) in self.components.iter().enumerate() {
             // A component that is never chosen in a direction contributes nothing there, and
             // need not be evaluated (it may not even apply to the state).
@@ -329,7 +339,7 @@ impl<S> Proposal<S> for Mixture<'_, S> {
                 let k = self.kind_offsets.partition_point(|&o| o <= kind) - 1;
                 let own =
                     self.components[k].ln_move_density(from, to, kind - self.kind_offsets[k])?;
-                Some(self.ln_selection(from)[k] + own)
+                Some(self.ln_selection_in(from)[k] + own)
             }
         }
     }
