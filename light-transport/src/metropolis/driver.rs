@@ -280,14 +280,19 @@ impl MetropolisStats {
 
 const BOOTSTRAP: u64 = 0xB007;
 const CHAINS: u64 = 0xC4A1;
-const SPLIT: usize = 16;
+/// Most groups of chains a slice is cut into, each a unit of parallel work with its own deposit
+/// buffer. Chains of one group (one MMLT path length, say) sit next to each other and cost alike,
+/// so a coarse cut leaves a thread waiting at the end of every slice on the group of the longest
+/// paths: 16 groups scaled MMLT on `cornell` 1.73–1.78× from one thread to two, 64 groups 1.93×.
+const SPLIT: usize = 64;
 /// Most slices a round is cut into (the granularity of an interrupt).
 const SLICES: u64 = 8;
 /// Most mutations (over all chains) a slice makes. A slice's deposits are held in per-chunk
-/// buffers until it ends and then enter the sink in chunk order, so this bounds that memory:
-/// PSSMLT records every strategy of both states at every mutation, and rounds of an eighth of
-/// a render once held 0.5 GB of splats at 1920×1080 (README, issue 17).
-const SLICE_MUTATIONS: u64 = 1 << 18;
+/// buffers until it ends and enter the sink while the next slice runs, so two slices' deposits
+/// are held at a time and this bounds that memory: PSSMLT records every strategy of both states
+/// at every mutation, and rounds of an eighth of a render once held 0.5 GB of splats at
+/// 1920×1080 (README, issue 17).
+const SLICE_MUTATIONS: u64 = 1 << 16;
 const EXCHANGE: u64 = 0xE8C4;
 
 fn key(seed: u64, g: usize, i: usize) -> u64 {
@@ -487,13 +492,21 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
             None => per_round,
         };
         let round_start = Instant::now();
-        let mut outputs: Vec<(K::Chunk, u64, Option<NormalisationTally>)> =
-            (0..chains.len().div_ceil(size))
-                .map(|_| {
-                    let t = tally_kind.map(|kind| NormalisationTally::new(kind, &strata));
-                    (sink.chunk(), 0, t)
-                })
-                .collect();
+        let n_chunks = chains.len().div_ceil(size);
+        let mut counts: Vec<(u64, Option<NormalisationTally>)> = (0..n_chunks)
+            .map(|_| {
+                (
+                    0,
+                    tally_kind.map(|kind| NormalisationTally::new(kind, &strata)),
+                )
+            })
+            .collect();
+        // Two sets of deposit buffers: the chains record a slice into one while the deposits of
+        // the slice before, in the other, enter the sink on the side (in chunk order, so the
+        // image does not depend on the thread count). Absorbing them after each slice instead
+        // left all threads but one idle meanwhile: 8% of MMLT's time on `cornell` (README).
+        let mut recording: Vec<K::Chunk> = (0..n_chunks).map(|_| sink.chunk()).collect();
+        let mut absorbing: Vec<K::Chunk> = (0..n_chunks).map(|_| sink.chunk()).collect();
         let slice = k.div_ceil(SLICES).min(SLICE_MUTATIONS / nchains).max(1);
         let mut left = k;
         let mut since_exchange = 0;
@@ -502,25 +515,30 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
             if let Some(e) = exchange_every {
                 step = step.min(e.max(1) - since_exchange).max(1);
             }
-            chains
-                .par_chunks_mut(size)
-                .zip(rngs.par_chunks_mut(size))
-                .zip(outputs.par_iter_mut())
-                .for_each(|((cs, rs), (chunk, rays, tally))| {
-                    crate::accel::take_ray_count();
-                    let mut rec = ExpectedValue {
-                        recorder: chunk,
-                        b,
-                        large_steps,
-                        tally: tally.as_mut(),
-                    };
-                    method.mutate_chunk(scene, cs, rs, step, &mut rec);
-                    *rays += crate::accel::take_ray_count();
-                });
-            // The slice's deposits enter the sink in chunk order (whatever the thread count).
-            for (chunk, _, _) in &mut outputs {
-                sink.absorb(chunk);
-            }
+            let absorb = || {
+                for chunk in &mut absorbing {
+                    sink.absorb(chunk);
+                }
+            };
+            let mutate = || {
+                chains
+                    .par_chunks_mut(size)
+                    .zip(rngs.par_chunks_mut(size))
+                    .zip(recording.par_iter_mut().zip(counts.par_iter_mut()))
+                    .for_each(|((cs, rs), (chunk, (rays, tally)))| {
+                        crate::accel::take_ray_count();
+                        let mut rec = ExpectedValue {
+                            recorder: chunk,
+                            b,
+                            large_steps,
+                            tally: tally.as_mut(),
+                        };
+                        method.mutate_chunk(scene, cs, rs, step, &mut rec);
+                        *rays += crate::accel::take_ray_count();
+                    })
+            };
+            rayon::join(absorb, mutate);
+            std::mem::swap(&mut recording, &mut absorbing);
             left -= step;
             since_exchange += step;
             stats.mutations += step * nchains;
@@ -534,7 +552,11 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
                 break;
             }
         }
-        for (_, rays, round_tally) in outputs {
+        // The round's last slice (or the one an interrupt ended).
+        for chunk in &mut absorbing {
+            sink.absorb(chunk);
+        }
+        for (rays, round_tally) in counts {
             stats.rays += rays;
             if let (Some(t), Some(r)) = (tally.as_mut(), round_tally) {
                 t.merge(&r);

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Scaling from one thread to two: the same render (same seed, same samples or mutations per
+# pixel, so the same work and the same image) on `--threads 1` and `--threads 2`, runs
+# alternating, and the ratio of the median render times (issue 17 asks for at least 1.9×).
+#
+#   scripts/thread-scaling.sh [SCENES] [ALGOS] [ROUNDS]
+#   scripts/thread-scaling.sh "cornell door" "mmlt cmlt" 3
+#
+# Defaults: SCENES = veach-bidir (../shared/scenes) and the built-ins cornell caustic door ring
+# pool; ALGOS = pt bdpt pssmlt mmlt mlt cmlt memlt; ROUNDS = 2; RESOLUTION = 512x288;
+# MAX_DEPTH = 7; SPP = 4 (PT: 4× that). Every method runs with its defaults. BIN names a binary
+# to use instead of building this checkout. Prints, per scene and algorithm, the median render
+# time on one and on two threads and their ratio; a final line gives the geometric mean.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+scenes=${1:-"$root/../shared/scenes/veach-bidir/scene.pbrt cornell caustic door ring pool"}
+algos=${2:-"pt bdpt pssmlt mmlt mlt cmlt memlt"}
+rounds=${3:-2}
+res=${RESOLUTION:-512x288} depth=${MAX_DEPTH:-7} spp=${SPP:-4}
+if [[ -z ${BIN:-} ]]; then
+  (cd "$root" && cargo build --release --quiet)
+  BIN=$root/target/release/charted
+fi
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+
+# One run: prints the render's seconds.
+run() {
+  local scene=$1 algo=$2 threads=$3 n=$spp
+  [[ $algo == pt ]] && n=$((4 * spp))
+  "$BIN" render "$scene" --algo "$algo" --spp "$n" --resolution "$res" --max-depth "$depth" \
+    --threads "$threads" -o "$out/img.exr" > "$out/log" 2>&1 || { cat "$out/log" >&2; return 1; }
+  sed -nE 's/^time .*render ([0-9.]+) s.*/\1/p' "$out/log"
+}
+
+median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+
+printf '%-12s %-7s %9s %9s %8s\n' scene algo "1 thread" "2 threads" scaling
+logsum=0 count=0
+for scene in $scenes; do
+  name=$scene
+  if [[ -f $scene ]]; then
+    name=$(basename "$scene" .pbrt)
+    [[ $name == scene ]] && name=$(basename "$(dirname "$scene")")
+  fi
+  for algo in $algos; do
+    : > "$out/one" && : > "$out/two"
+    for _ in $(seq 1 "$rounds"); do
+      run "$scene" "$algo" 1 >> "$out/one"
+      run "$scene" "$algo" 2 >> "$out/two"
+    done
+    t1=$(median < "$out/one") t2=$(median < "$out/two")
+    ratio=$(awk -v a="$t1" -v b="$t2" 'BEGIN { printf "%.3f", a / b }')
+    printf '%-12s %-7s %9.2f %9.2f %7.2f×\n' "$name" "$algo" "$t1" "$t2" "$ratio"
+    logsum=$(awk -v s="$logsum" -v r="$ratio" 'BEGIN { print s + log(r) }')
+    count=$((count + 1))
+  done
+done
+awk -v s="$logsum" -v n="$count" 'BEGIN { printf "geometric mean scaling over %d runs: %.3f×\n", n, exp(s / n) }'
