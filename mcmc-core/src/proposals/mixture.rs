@@ -168,35 +168,19 @@ impl<'a, S> Mixture<'a, S> {
 
     /// [`Mixture::ln_selection`] on the stack (the acceptance ratio asks for it twice a step).
     fn ln_selection_in(&self, x: &S) -> PerComponent {
-        match self.selection {
-            Selection::Fixed => PerComponent::from_slice(&self.ln_weights),
-            Selection::Suitability => {
-                let w: PerComponent = self
-                    .components
-                    .iter()
-                    .zip(&self.ln_weights)
-                    // A component without weight is never chosen: its suitability is not asked
-                    // (it may be costly, e.g. a path mutation finding its strategies).
-                    .map(|(c, lw)| {
-                        if *lw == f64::NEG_INFINITY {
-                            0.0
-                        } else {
-                            lw.exp() * suitability(c.as_ref(), x)
-                        }
-                    })
-                    .collect();
-                let total: f64 = w.iter().sum();
-                w.iter()
-                    .map(|&v| {
-                        if total > 0.0 {
-                            (v / total).ln()
-                        } else {
-                            f64::NEG_INFINITY
-                        }
-                    })
-                    .collect()
-            }
-        }
+        let Some(w) = self.suited(x) else {
+            return PerComponent::from_slice(&self.ln_weights);
+        };
+        let total: f64 = w.iter().sum();
+        w.iter()
+            .map(|&v| {
+                if total > 0.0 {
+                    (v / total).ln()
+                } else {
+                    f64::NEG_INFINITY
+                }
+            })
+            .collect()
     }
 
     /// `w_k s_k(x)` for every component under suitability selection (`None` under fixed
