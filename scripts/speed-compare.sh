@@ -62,17 +62,13 @@ run() {
   echo "$t $(cat "$out/mem")"
 }
 
-median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+# shellcheck source=timing-lib.sh
+source "$root/scripts/timing-lib.sh"
 
 printf '%-12s %-7s %9s %9s %8s %10s %10s\n' scene algo "old s" "new s" speed-up "old MB" "new MB"
 logsum=0 count=0
 for scene in $scenes; do
-  # veach-bidir/scene.pbrt is named by its folder, other files by their stem, built-ins as given.
-  name=$scene
-  if [[ -f $scene ]]; then
-    name=$(basename "$scene" .pbrt)
-    [[ $name == scene ]] && name=$(basename "$(dirname "$scene")")
-  fi
+  name=$(scene_name "$scene")
   for algo in $algos; do
     : > "$out/old" && : > "$out/new"
     for _ in $(seq 1 "$rounds"); do

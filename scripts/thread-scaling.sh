@@ -33,16 +33,13 @@ run() {
   sed -nE 's/^time .*render ([0-9.]+) s.*/\1/p' "$out/log"
 }
 
-median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+# shellcheck source=timing-lib.sh
+source "$root/scripts/timing-lib.sh"
 
 printf '%-12s %-7s %9s %9s %8s\n' scene algo "1 thread" "2 threads" scaling
 logsum=0 count=0
 for scene in $scenes; do
-  name=$scene
-  if [[ -f $scene ]]; then
-    name=$(basename "$scene" .pbrt)
-    [[ $name == scene ]] && name=$(basename "$(dirname "$scene")")
-  fi
+  name=$(scene_name "$scene")
   for algo in $algos; do
     : > "$out/one" && : > "$out/two"
     for _ in $(seq 1 "$rounds"); do
