@@ -253,12 +253,40 @@ enum Storage {
 }
 
 /// The lobes of a BSDF.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct Lobes {
     items: Storage,
     len: usize,
     group_prob: [f64; MAX_LOBES],
     groups: usize,
+}
+
+impl Clone for Lobes {
+    fn clone(&self) -> Self {
+        Self {
+            items: self.items.clone(),
+            len: self.len,
+            group_prob: self.group_prob,
+            groups: self.groups,
+        }
+    }
+
+    /// Only the lobes in use, into the storage this list has where they fit: a hit on a material
+    /// whose lobes were built once ([`super::PrebuiltLobes`]) copies them into its vertex's BSDF
+    /// (a derived `clone_from` would copy every slot, and allocate again for spilled lists).
+    fn clone_from(&mut self, source: &Self) {
+        let lobes = source.as_slice();
+        match &mut self.items {
+            Storage::Inline(a) if lobes.len() <= INLINE_LOBES => {
+                a[..lobes.len()].copy_from_slice(lobes)
+            }
+            Storage::Spilled(b) => b[..lobes.len()].copy_from_slice(lobes),
+            Storage::Inline(_) => self.items = source.items.clone(),
+        }
+        self.len = source.len;
+        self.group_prob = source.group_prob;
+        self.groups = source.groups;
+    }
 }
 
 /// Equal lobes and groups (storage beyond them is ignored).

@@ -16,7 +16,7 @@ use super::mirror::SpecularReflection;
 use super::rough_dielectric::RoughDielectric;
 use super::texture;
 use crate::error::{Error, Result};
-use crate::scene::{MaterialDesc, TextureDesc};
+use crate::scene::{MaterialDesc, RgbTexture, TextureDesc};
 use crate::spectrum::Rgb;
 
 /// Deepest nesting of mixes (deeper nesting, or a cycle, is an error).
@@ -60,6 +60,44 @@ fn index(material: usize, eta: f64) -> Result<f64> {
             format!("index of refraction must be finite and positive, got {eta}"),
         ))
     }
+}
+
+/// Make `lobes` the lobes of material `material` at texture coordinates `uv`: cleared, the
+/// material tree's lobes added, group probabilities normalised. On error `lobes` is unspecified.
+pub fn build(
+    lobes: &mut Lobes,
+    materials: &[MaterialDesc],
+    textures: &[TextureDesc],
+    material: usize,
+    uv: [f64; 2],
+) -> Result<()> {
+    lobes.clear();
+    Builder::new(materials, textures, material, uv, lobes).add(material, Rgb::WHITE, 1.0, 0)?;
+    lobes.finish();
+    Ok(())
+}
+
+/// Whether the lobes of material `m` can differ from one surface point to another: an image
+/// texture somewhere in its tree (or a tree [`Builder::add`] rejects, which is then rejected
+/// point by point as before).
+pub fn varies_over_surface(materials: &[MaterialDesc], m: usize) -> bool {
+    fn walk(materials: &[MaterialDesc], m: usize, depth: usize) -> bool {
+        let image = |t: &RgbTexture| matches!(t, RgbTexture::Image { .. });
+        match materials.get(m) {
+            None => true,
+            Some(_) if depth > MAX_DEPTH => true,
+            Some(MaterialDesc::Matte { kd }) | Some(MaterialDesc::Layered { kd, .. }) => image(kd),
+            Some(MaterialDesc::Mix { a, b, .. }) => {
+                walk(materials, *a, depth + 1) || walk(materials, *b, depth + 1)
+            }
+            Some(
+                MaterialDesc::Metal { .. }
+                | MaterialDesc::Mirror { .. }
+                | MaterialDesc::Glass { .. },
+            ) => false,
+        }
+    }
+    walk(materials, m, 0)
 }
 
 /// Collects lobes while walking the material tree, into a list it borrows (so a BSDF is built in

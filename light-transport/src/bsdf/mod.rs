@@ -64,6 +64,7 @@ pub mod lobes;
 pub mod material;
 pub mod microfacet;
 pub mod mirror;
+mod prebuilt;
 pub mod rough_dielectric;
 pub mod texture;
 
@@ -73,6 +74,7 @@ use crate::spectrum::Rgb;
 use lobes::{LobeKind, Lobes, MAX_LOBES, positive};
 use mcmc_core::ChainRng;
 use mcmc_core::rng::uniform;
+pub use prebuilt::PrebuiltLobes;
 
 /// Which quantity a random walk carries.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -149,8 +151,9 @@ impl LocalPair {
     }
 }
 
-/// A BSDF at one surface point.
-#[derive(Clone, Debug)]
+/// A BSDF at one surface point. Two BSDFs are equal when their frames, geometric normals and
+/// lobes are (storage beyond the lobes in use is ignored).
+#[derive(Clone, Debug, PartialEq)]
 pub struct Bsdf {
     /// Shading frame (normal = shading normal; first tangent = anisotropy direction).
     pub frame: Frame,
@@ -198,6 +201,11 @@ impl Bsdf {
         Ok(bsdf)
     }
 
+    /// The lobes.
+    pub fn lobes(&self) -> &Lobes {
+        &self.lobes
+    }
+
     /// A BSDF without lobes (black) in `frame`.
     pub fn empty(frame: Frame) -> Bsdf {
         Bsdf {
@@ -220,11 +228,15 @@ impl Bsdf {
     ) -> crate::Result<()> {
         self.frame = frame;
         self.ng = frame.n;
-        self.lobes.clear();
-        let mut b = material::Builder::new(materials, textures, material, uv, &mut self.lobes);
-        b.add(material, Rgb::WHITE, 1.0, 0)?;
-        self.lobes.finish();
-        Ok(())
+        material::build(&mut self.lobes, materials, textures, material, uv)
+    }
+
+    /// This BSDF with the lobes `lobes` (a material's, built once: [`PrebuiltLobes`]) in frame
+    /// `frame` (geometric normal `frame.n`), copied into its storage.
+    pub fn rebuild_from(&mut self, lobes: &Lobes, frame: Frame) {
+        self.frame = frame;
+        self.ng = frame.n;
+        self.lobes.clone_from(lobes);
     }
 
     /// The same BSDF on a surface whose geometric normal is `ng` (the frame's normal being the

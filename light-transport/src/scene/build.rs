@@ -2,7 +2,7 @@
 
 use super::description::*;
 use crate::accel::{Bvh, Compact, Primitive};
-use crate::bsdf::Bsdf;
+use crate::bsdf::{Bsdf, PrebuiltLobes};
 use crate::camera::Camera;
 use crate::geometry::{
     Hit, NO_SHADING, Ray, Sphere, SurfacePoint, Triangle, TriangleShading, offset_origin,
@@ -23,7 +23,8 @@ pub struct Scene {
     pub primitive_material: Vec<u32>,
     /// Light of each primitive ([`NONE`] if not emissive).
     pub primitive_light: Vec<u32>,
-    /// Materials.
+    /// Materials. The lobes of those without image textures are built from them once, when the
+    /// scene is built: a change made here afterwards does not reach them.
     pub materials: Vec<MaterialDesc>,
     /// Textures.
     pub textures: Vec<TextureDesc>,
@@ -41,6 +42,8 @@ pub struct Scene {
     /// see [`crate::path::Vertex::shading_factor`]). Always on; off only to show that the
     /// unbiasedness tests see its absence.
     pub adjoint_correction: bool,
+    /// The lobes of the materials that are the same at every surface point.
+    lobes: PrebuiltLobes,
 }
 
 impl Scene {
@@ -277,6 +280,7 @@ impl Scene {
             bvh,
             primitive_material: prim_mat,
             primitive_light: prim_light,
+            lobes: PrebuiltLobes::new(&materials, &desc.textures),
             materials,
             textures: desc.textures.clone(),
             light_distribution: LightDistribution::new(&powers),
@@ -316,23 +320,32 @@ impl Scene {
     /// The BSDF at a surface point: in the shading frame (shading normal, shading tangent), the
     /// geometric normal deciding the sides of the surface.
     pub fn bsdf(&self, point: &SurfacePoint) -> Result<Bsdf> {
-        let m = self.primitive_material[point.primitive as usize] as usize;
         let frame = Frame::from_normal_tangent(point.ns, point.tangent);
-        Ok(
-            Bsdf::from_material(&self.materials, &self.textures, m, point.uv, frame)?
-                .with_geometric_normal(point.n),
-        )
+        let mut b = Bsdf::empty(frame);
+        self.rebuild_bsdf(point, frame, &mut b)?;
+        Ok(b)
+    }
+
+    /// Make `b` the BSDF at `point` in the shading frame `frame`: copied from the material's
+    /// prebuilt lobes where it has them, built from its tree otherwise.
+    #[inline]
+    fn rebuild_bsdf(&self, point: &SurfacePoint, frame: Frame, b: &mut Bsdf) -> Result<()> {
+        let m = self.primitive_material[point.primitive as usize] as usize;
+        match self.lobes.get(m) {
+            Some(lobes) => b.rebuild_from(lobes, frame),
+            None => b.rebuild(&self.materials, &self.textures, m, point.uv, frame)?,
+        }
+        b.ng = point.n;
+        Ok(())
     }
 
     /// [`Scene::bsdf`] in place, reusing the storage of the BSDF `out` holds: afterwards `out`
     /// is the BSDF at `point`, or `None` where [`Scene::bsdf`] fails.
     pub fn bsdf_into(&self, point: &SurfacePoint, out: &mut Option<Bsdf>) {
-        let m = self.primitive_material[point.primitive as usize] as usize;
         let frame = Frame::from_normal_tangent(point.ns, point.tangent);
         let b = out.get_or_insert_with(|| Bsdf::empty(frame));
-        match b.rebuild(&self.materials, &self.textures, m, point.uv, frame) {
-            Ok(()) => b.ng = point.n,
-            Err(_) => *out = None,
+        if self.rebuild_bsdf(point, frame, b).is_err() {
+            *out = None;
         }
     }
 
@@ -477,4 +490,109 @@ fn triangle_shading(mesh: &MeshDesc, tri: [u32; 3], n: DVec3) -> Result<Option<T
         None => None,
     };
     Ok(Some(TriangleShading { n: ns, s }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin::SceneBuilder;
+    use mcmc_core::rng::{stream, uniform};
+
+    /// The BSDF at every hit is the one its material's tree gives at that point, whether the
+    /// scene copied prebuilt lobes (untextured materials) or built them there (textured ones),
+    /// also into a BSDF that last held another material's lobes.
+    #[test]
+    fn the_bsdf_at_a_hit_is_its_materials_at_that_point() {
+        let mut b = SceneBuilder::new(48, 32, DVec3::new(0.0, 1.0, 3.0), DVec3::ZERO, 60.0);
+        let textured = b.material(MaterialDesc::Matte {
+            kd: RgbTexture::Image {
+                texture: 0,
+                scale: Rgb::WHITE,
+            },
+        });
+        let white = b.matte(0.7, 0.7, 0.7);
+        let plastic = b.material(MaterialDesc::Layered {
+            kd: RgbTexture::Constant(Rgb::new(0.5, 0.4, 0.3)),
+            ks: Rgb::splat(0.2),
+            alpha_u: 0.1,
+            alpha_v: 0.1,
+            eta: 1.5,
+        });
+        let amount = Rgb::new(0.2, 0.5, 0.8);
+        let two = b.material(MaterialDesc::Mix {
+            a: plastic,
+            b: plastic,
+            amount,
+        });
+        let spilled = b.material(MaterialDesc::Mix {
+            a: two,
+            b: plastic,
+            amount,
+        });
+        let textured_mix = b.material(MaterialDesc::Mix {
+            a: textured,
+            b: spilled,
+            amount,
+        });
+        let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+        b.quad(
+            DVec3::new(-2.0, 0.0, -2.0),
+            z * 4.0,
+            x * 2.0,
+            textured,
+            None,
+        );
+        b.quad(
+            DVec3::new(0.0, 0.0, -2.0),
+            z * 4.0,
+            x * 2.0,
+            textured_mix,
+            None,
+        );
+        b.quad(DVec3::new(-2.0, 0.0, -1.0), x * 2.0, y * 2.0, spilled, None);
+        b.quad(DVec3::new(0.0, 0.0, -1.0), x * 2.0, y * 2.0, white, None);
+        b.sphere(DVec3::new(0.0, 0.4, 0.0), 0.4, two);
+        let light = Some(Rgb::splat(5.0));
+        b.quad(DVec3::new(-0.5, 3.0, -0.5), z, x, white, light);
+        let mut d = b.finish();
+        d.textures.push(TextureDesc {
+            texels: vec![
+                Rgb::splat(0.9),
+                Rgb::splat(0.1),
+                Rgb::splat(0.2),
+                Rgb::splat(0.8),
+            ],
+            width: 2,
+            height: 2,
+            uv_scale: [3.0, 3.0],
+            uv_offset: [0.0, 0.0],
+            name: "checker".into(),
+        });
+        let scene = Scene::new(&d, None).unwrap();
+        assert!(scene.lobes.get(textured).is_none() && scene.lobes.get(textured_mix).is_none());
+        assert!(scene.lobes.get(spilled).is_some() && scene.lobes.get(white).is_some());
+        let mut rng = stream(3, 0);
+        let mut slot = None;
+        let mut seen = vec![0; scene.materials.len()];
+        for _ in 0..2000 {
+            let film = [uniform(&mut rng), uniform(&mut rng)];
+            let ray = scene.camera.sample_ray(film, [0.5, 0.5]).ray;
+            let Some(hit) = scene.intersect(&ray) else {
+                continue;
+            };
+            let p = &hit.point;
+            let m = scene.primitive_material[p.primitive as usize] as usize;
+            let frame = Frame::from_normal_tangent(p.ns, p.tangent);
+            let expected = Bsdf::from_material(&scene.materials, &scene.textures, m, p.uv, frame)
+                .unwrap()
+                .with_geometric_normal(p.n);
+            scene.bsdf_into(p, &mut slot);
+            assert_eq!(slot.as_ref(), Some(&expected), "material {m} at {:?}", p.uv);
+            assert_eq!(scene.bsdf(p).unwrap(), expected);
+            seen[m] += 1;
+        }
+        for m in [textured, white, two, spilled, textured_mix] {
+            assert!(seen[m] > 20, "material {m} hit {} times", seen[m]);
+        }
+    }
 }
