@@ -378,6 +378,18 @@ impl Lobes {
     /// `P_j(wo)` for every lobe.
     pub fn probabilities(&self, wo: DVec3) -> Probabilities {
         let mut w = [0.0; MAX_LOBES];
+        if let [l] = self.as_slice() {
+            // One lobe (most materials): its group's sum is its own weight; the same arithmetic
+            // as below, without the per-group sums.
+            let v = l.weight.at(wo);
+            let s = if v.is_finite() && v > 0.0 { v } else { 0.0 };
+            w[0] = if s > 0.0 {
+                self.group_prob[l.group] * s / s
+            } else {
+                0.0
+            };
+            return w;
+        }
         let mut sums = [0.0; MAX_LOBES];
         for (j, l) in self.as_slice().iter().enumerate() {
             let v = l.weight.at(wo);

@@ -8,4 +8,4 @@ mod unit_cube;
 pub use independence::{Independence, UniformCube};
 pub use mixture::{Mixture, MixtureRule, Selection, log_sum_exp};
 pub use random_walk::GaussianRandomWalk;
-pub use unit_cube::{CubeWalk, SmallStep, wrap};
+pub use unit_cube::{CubeWalk, PreparedStep, SmallStep, wrap};
