@@ -122,7 +122,10 @@ impl PrimarySample {
         self.iteration = 0;
         self.last_large = 0;
         self.large = false;
-        self.step = PreparedStep::new(step);
+        if self.step.step() != step {
+            // A bootstrap resets a state per sample, mostly to the same step.
+            self.step = PreparedStep::new(step);
+        }
         self.rng = ChainRng::seed_from_u64(seed);
     }
 
