@@ -71,7 +71,7 @@ impl Estimator for PathTracer {
             let Some(hit) = scene.intersect(&ray) else {
                 break;
             };
-            let p = hit.point;
+            let p = &hit.point;
             let wo = -ray.d;
             // Emission reached by the path: `bounces + 1` edges.
             l += beta
@@ -85,7 +85,7 @@ impl Estimator for PathTracer {
             if bounces + 2 > self.max_edges {
                 break;
             }
-            scene.bsdf_into(&p, &mut slot);
+            scene.bsdf_into(p, &mut slot);
             let Some(bsdf) = slot.as_ref() else { break };
             // Next-event estimation: a path of `bounces + 2` edges.
             stream.start_stream(TECHNIQUE_STREAM);
@@ -99,7 +99,7 @@ impl Estimator for PathTracer {
                 l += beta
                     * next_event(
                         scene,
-                        &p,
+                        p,
                         wo,
                         bsdf,
                         choice,
