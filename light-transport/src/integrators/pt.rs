@@ -68,7 +68,9 @@ impl Estimator for PathTracer {
         // Each vertex's BSDF is built in this one slot (no BSDF moved per bounce).
         let mut slot = None;
         for bounces in 0..self.max_edges {
-            let Some(hit) = scene.intersect(&ray) else {
+            // Bound in place: moving the hit out of its `Option` copied it per bounce.
+            let found = scene.intersect(&ray);
+            let Some(hit) = &found else {
                 break;
             };
             let p = &hit.point;
@@ -77,7 +79,7 @@ impl Estimator for PathTracer {
             l += beta
                 * emitted(
                     scene,
-                    &hit,
+                    hit,
                     wo,
                     (!specular).then_some(last_pdf),
                     self.heuristic,
