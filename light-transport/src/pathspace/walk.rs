@@ -27,17 +27,21 @@ pub fn trace(scene: &Scene, from: &Vertex, w: DVec3) -> Option<Vertex> {
     } else {
         from.p()
     };
-    let hit = scene.intersect(&Ray::new(o, w))?;
-    Some(Vertex {
+    let found = scene.intersect(&Ray::new(o, w));
+    let hit = found.as_ref()?;
+    // The BSDF is built inside the vertex (a BSDF returned by value was copied twice more).
+    let mut v = Vertex {
         kind: VertexKind::Surface,
-        bsdf: scene.bsdf(&hit.point).ok(),
+        bsdf: None,
         point: hit.point,
         wo: -w,
         beta: Rgb::BLACK,
         delta: false,
         pdf_fwd: 0.0,
         pdf_rev: 0.0,
-    })
+    };
+    scene.bsdf_into(&hit.point, &mut v.bsdf);
+    Some(v)
 }
 
 /// Point `wo` of the last vertex of `sub` (a subpath in walk order) at its predecessor.
