@@ -64,7 +64,7 @@ pub mod lobes;
 pub mod material;
 pub mod microfacet;
 pub mod mirror;
-mod prebuilt;
+pub(crate) mod prebuilt;
 pub mod rough_dielectric;
 pub mod texture;
 

@@ -42,7 +42,7 @@ impl PrebuiltLobes {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::scene::RgbTexture;
     use crate::spectrum::Rgb;
@@ -69,7 +69,9 @@ mod tests {
         }
     }
 
-    fn checker() -> TextureDesc {
+    /// A 2×2 checker of four grey levels, repeated `repeats` times across `[0, 1)²` (also used by
+    /// the scene's test of BSDFs at hits).
+    pub(crate) fn checker(repeats: f64) -> TextureDesc {
         TextureDesc {
             texels: vec![
                 Rgb::splat(0.9),
@@ -79,7 +81,7 @@ mod tests {
             ],
             width: 2,
             height: 2,
-            uv_scale: [1.0, 1.0],
+            uv_scale: [repeats, repeats],
             uv_offset: [0.0, 0.0],
             name: "checker".into(),
         }
@@ -125,7 +127,7 @@ mod tests {
 
     #[test]
     fn prebuilt_lobes_are_the_lobes_built_at_every_point() {
-        let (m, t) = (materials(), vec![checker()]);
+        let (m, t) = (materials(), vec![checker(1.0)]);
         let pre = PrebuiltLobes::new(&m, &t);
         for (i, expect_prebuilt) in [
             false, true, false, true, true, true, true, true, false, false, false, true,
@@ -155,7 +157,7 @@ mod tests {
     /// A copy into a list holds the source's lobes and groups, and keeps spilled storage.
     #[test]
     fn a_copy_of_lobes_is_the_list_in_the_storage_it_has() {
-        let (m, t) = (materials(), vec![checker()]);
+        let (m, t) = (materials(), vec![checker(1.0)]);
         let pre = PrebuiltLobes::new(&m, &t);
         let (one, two, five) = (
             pre.get(1).unwrap(),

@@ -555,19 +555,7 @@ mod tests {
         let light = Some(Rgb::splat(5.0));
         b.quad(DVec3::new(-0.5, 3.0, -0.5), z, x, white, light);
         let mut d = b.finish();
-        d.textures.push(TextureDesc {
-            texels: vec![
-                Rgb::splat(0.9),
-                Rgb::splat(0.1),
-                Rgb::splat(0.2),
-                Rgb::splat(0.8),
-            ],
-            width: 2,
-            height: 2,
-            uv_scale: [3.0, 3.0],
-            uv_offset: [0.0, 0.0],
-            name: "checker".into(),
-        });
+        d.textures.push(crate::bsdf::prebuilt::tests::checker(3.0));
         let scene = Scene::new(&d, None).unwrap();
         assert!(scene.lobes.get(textured).is_none() && scene.lobes.get(textured_mix).is_none());
         assert!(scene.lobes.get(spilled).is_some() && scene.lobes.get(white).is_some());
