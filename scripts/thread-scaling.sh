@@ -13,6 +13,11 @@
 # time on one and on two threads and their ratio, then the same from the fastest run of each
 # (other work on a shared machine only adds time, and a two-thread run needs both cores free, so
 # it is hit more often); final lines give the geometric means of both ratios.
+#
+# CEILING=1 adds, per round, two one-thread renders run at once as separate processes: each does
+# the whole work, so `2 × (one thread alone) / (the slower of the pair)` is what this machine gives
+# two workers that share nothing (its "ceiling"), and the program's scaling over it is the share
+# of the machine's two cores that the two-thread render turns into speed.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 scenes=${1:-"$root/../shared/scenes/veach-bidir/scene.pbrt cornell caustic door ring pool"}
@@ -26,35 +31,58 @@ fi
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
-# One run: prints the render's seconds.
+# One run: prints the render's seconds (TAG names its output, for runs at the same time).
 run() {
-  local scene=$1 algo=$2 threads=$3 n=$spp
+  local scene=$1 algo=$2 threads=$3 tag=${4:-a} n=$spp
   [[ $algo == pt ]] && n=$((4 * spp))
   "$BIN" render "$scene" --algo "$algo" --spp "$n" --resolution "$res" --max-depth "$depth" \
-    --threads "$threads" -o "$out/img.exr" > "$out/log" 2>&1 || { cat "$out/log" >&2; return 1; }
-  sed -nE 's/^time .*render ([0-9.]+) s.*/\1/p' "$out/log"
+    --threads "$threads" -o "$out/img-$tag.exr" > "$out/log-$tag" 2>&1 ||
+    { cat "$out/log-$tag" >&2; return 1; }
+  sed -nE 's/^time .*render ([0-9.]+) s.*/\1/p' "$out/log-$tag"
+}
+
+# Two one-thread runs at once: prints the slower one's seconds.
+run_pair() {
+  run "$1" "$2" 1 a > "$out/pair-a" &
+  local a=$!
+  run "$1" "$2" 1 b > "$out/pair-b"
+  wait "$a"
+  cat "$out/pair-a" "$out/pair-b" | sort -g | tail -n 1
 }
 
 # shellcheck source=timing-lib.sh
 source "$root/scripts/timing-lib.sh"
 
-printf '%-12s %-7s %9s %9s %8s %9s %9s %8s\n' scene algo "1 thread" "2 threads" scaling \
+ceiling=${CEILING:-0}
+printf '%-12s %-7s %9s %9s %8s %9s %9s %8s' scene algo "1 thread" "2 threads" scaling \
   "1 (min)" "2 (min)" "(min)"
-logsum=0 logmin=0 count=0
+[[ $ceiling == 1 ]] && printf ' %9s %8s %10s' "1+1 at once" ceiling "of ceiling"
+printf '\n'
+logsum=0 logmin=0 logceil=0 logshare=0 count=0
 for scene in $scenes; do
   name=$(scene_name "$scene")
   for algo in $algos; do
-    : > "$out/one" && : > "$out/two"
+    : > "$out/one" && : > "$out/two" && : > "$out/pair"
     for _ in $(seq 1 "$rounds"); do
       run "$scene" "$algo" 1 >> "$out/one"
       run "$scene" "$algo" 2 >> "$out/two"
+      [[ $ceiling == 1 ]] && run_pair "$scene" "$algo" >> "$out/pair"
     done
     t1=$(median < "$out/one") t2=$(median < "$out/two")
     m1=$(minimum < "$out/one") m2=$(minimum < "$out/two")
     ratio=$(awk -v a="$t1" -v b="$t2" 'BEGIN { printf "%.3f", a / b }')
     rmin=$(awk -v a="$m1" -v b="$m2" 'BEGIN { printf "%.3f", a / b }')
-    printf '%-12s %-7s %9.2f %9.2f %7.2f× %9.2f %9.2f %7.2f×\n' "$name" "$algo" "$t1" "$t2" \
+    printf '%-12s %-7s %9.2f %9.2f %7.2f× %9.2f %9.2f %7.2f×' "$name" "$algo" "$t1" "$t2" \
       "$ratio" "$m1" "$m2" "$rmin"
+    if [[ $ceiling == 1 ]]; then
+      tp=$(median < "$out/pair")
+      ceil=$(awk -v a="$t1" -v b="$tp" 'BEGIN { printf "%.3f", 2 * a / b }')
+      share=$(awk -v r="$ratio" -v c="$ceil" 'BEGIN { printf "%.3f", r / c }')
+      printf ' %9.2f %7.2f× %9.1f%%' "$tp" "$ceil" "$(awk -v s="$share" 'BEGIN { print 100 * s }')"
+      logceil=$(awk -v s="$logceil" -v r="$ceil" 'BEGIN { print s + log(r) }')
+      logshare=$(awk -v s="$logshare" -v r="$share" 'BEGIN { print s + log(r) }')
+    fi
+    printf '\n'
     logsum=$(awk -v s="$logsum" -v r="$ratio" 'BEGIN { print s + log(r) }')
     logmin=$(awk -v s="$logmin" -v r="$rmin" 'BEGIN { print s + log(r) }')
     count=$((count + 1))
@@ -62,3 +90,7 @@ for scene in $scenes; do
 done
 awk -v s="$logsum" -v n="$count" 'BEGIN { printf "geometric mean scaling over %d runs: %.3f× (medians)\n", n, exp(s / n) }'
 awk -v s="$logmin" -v n="$count" 'BEGIN { printf "geometric mean scaling over %d runs: %.3f× (fastest runs)\n", n, exp(s / n) }'
+if [[ $ceiling == 1 ]]; then
+  awk -v s="$logceil" -v n="$count" 'BEGIN { printf "geometric mean ceiling (two one-thread runs at once): %.3f×\n", exp(s / n) }'
+  awk -v s="$logshare" -v n="$count" 'BEGIN { printf "geometric mean share of the ceiling: %.1f%%\n", 100 * exp(s / n) }'
+fi
