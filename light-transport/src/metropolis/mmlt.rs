@@ -11,9 +11,7 @@ use super::driver::Method;
 use super::importance::ImportanceKind;
 use super::pssmlt::{PrimaryState, mutate_primary};
 use super::stream::PrimaryStream;
-use crate::path::{
-    MisHeuristic, Subpath, WalkSettings, camera_subpath, connect, light_subpath, mis_weight,
-};
+use crate::path::{MisHeuristic, Subpath, WalkSettings, connect, mis_weight, technique_subpaths};
 use crate::sampler::{CAMERA_STREAM, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
 use mcmc_core::kernel::Observer;
@@ -69,9 +67,7 @@ impl Mmlt {
         let t = k + 1 - s;
         let value = SUBPATHS.with(|b| {
             let (cam, light) = &mut *b.borrow_mut();
-            camera_subpath(scene, &mut stream, t, None, cam);
-            light_subpath(scene, &mut stream, s, light);
-            if cam.len() < t || light.len() < s {
+            if !technique_subpaths(scene, &mut stream, s, t, cam, light) {
                 return None;
             }
             let c = connect(scene, light, cam, s, t)?;

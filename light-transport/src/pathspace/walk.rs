@@ -11,7 +11,7 @@ use super::state::PathState;
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, SurfacePoint, offset_origin};
 use crate::math::{DVec3, Frame};
-use crate::path::{Subpath, Vertex, VertexKind, camera_subpath, connect, light_subpath};
+use crate::path::{Subpath, Vertex, VertexKind, connect, technique_subpaths};
 use crate::sampler::SampleStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -255,9 +255,7 @@ pub fn sample_path<S: SampleStream>(
     }
     BUFFERS.with_borrow_mut(|(light, cam)| {
         let t = k + 1 - s;
-        camera_subpath(scene, stream, t, None, cam);
-        light_subpath(scene, stream, s, light);
-        if cam.len() < t || light.len() < s {
+        if !technique_subpaths(scene, stream, s, t, cam, light) {
             return None;
         }
         connect(scene, light, cam, s, t)?;
