@@ -259,10 +259,10 @@ pub fn light_subpath_with<S: SampleStream>(
 /// the light subpath is then not traced at all when the camera subpath already decided it (a
 /// third to a half of MMLT's evaluations on the built-in scenes and `veach-bidir`, bootstrap
 /// included), and `light` is left as it was. Where the strategy can contribute, both walks read
-/// the stream as before, so they are the same subpaths. What changes is which numbers a stopped
-/// evaluation leaves unread: a primary-sample chain brings those up to date when they are next
-/// read (Kelemen et al. 2002's lazy mutation), so its law is unchanged, though its random numbers
-/// are drawn in another order.
+/// the stream as before, so they are the same subpaths. A stopped evaluation only leaves numbers
+/// unread, in a candidate that is then rejected (its value is zero) and whose numbers come from
+/// its own generator, or in a bootstrap sample of its own seed: the chains and images are bit for
+/// bit those of tracing both walks every time.
 pub fn technique_subpaths<S: SampleStream>(
     scene: &Scene,
     stream: &mut S,
