@@ -255,7 +255,8 @@ pub fn light_subpath_with<S: SampleStream>(
 /// The two subpaths of the single strategy `(s, t)` (Hachisuka et al. 2014's technique, a
 /// technique chart of charted MLT): a camera subpath of `t` vertices into `camera` and a light
 /// subpath of `s` vertices into `light`. `false` when the strategy contributes nothing because a
-/// walk ended early or the camera end cannot take a connection (a delta-only BSDF, for `s > 0`);
+/// walk ended early, the camera end cannot take a connection (a delta-only BSDF, for `s > 0`), or
+/// there is no camera vertex (`t = 0`: no strategy connects to the lens by chance);
 /// the light subpath is then not traced at all when the camera subpath already decided it (a
 /// third to a half of MMLT's evaluations on the built-in scenes and `veach-bidir`, bootstrap
 /// included), and `light` is left as it was. Where the strategy can contribute, both walks read
@@ -272,7 +273,7 @@ pub fn technique_subpaths<S: SampleStream>(
     light: &mut Subpath,
 ) -> bool {
     camera_subpath(scene, stream, t, None, camera);
-    if camera.len() < t || (s > 0 && !camera[t - 1].connectible()) {
+    if t == 0 || camera.len() < t || (s > 0 && !camera[t - 1].connectible()) {
         return false;
     }
     light_subpath(scene, stream, s, light);
@@ -376,9 +377,9 @@ mod tests {
     /// A strategy's two subpaths traced together with the early stop are those traced one after
     /// the other from the same numbers whenever the strategy can contribute, and the stop never
     /// drops a strategy that connects: on every built-in Metropolis scene, for every `(s, t)` of
-    /// paths of 1 to 5 edges, 60 streams each (7 200 cases: 2 469 stopped before the light
-    /// subpath, 625 connect). Fails when a full camera subpath is stopped (`<=` for `<`) or a
-    /// short light subpath let through (checked by hand).
+    /// paths of 1 to 5 edges (`t = 0` included), 60 streams each (9 000 cases: 4 269 stopped
+    /// before the light subpath, 625 connect). Fails when a full camera subpath is stopped (`<=`
+    /// for `<`) or a short light subpath let through (checked by hand).
     #[test]
     fn technique_subpaths_stop_only_where_nothing_connects() {
         let (mut cam, mut light) = (Subpath::new(), Subpath::new());
@@ -388,7 +389,7 @@ mod tests {
             let desc = builtin(name).expect("a built-in scene");
             let scene = Scene::new(&desc, Some((32, 24))).expect("a valid scene");
             for k in 1..=5 {
-                for s in 0..=k {
+                for s in 0..=k + 1 {
                     let t = k + 1 - s;
                     for seed in 0..60 {
                         let seed = (k * 1000 + s * 100 + seed) as u64;
@@ -404,7 +405,8 @@ mod tests {
                         cases += 1;
                         connected += usize::from(connects);
                         if !ok {
-                            stopped += usize::from(cam.len() < t || !cam[t - 1].connectible());
+                            stopped +=
+                                usize::from(t == 0 || cam.len() < t || !cam[t - 1].connectible());
                             assert!(!connects, "{name} k={k} s={s} seed {seed}: stopped");
                             continue;
                         }
