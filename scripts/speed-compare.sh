@@ -80,8 +80,8 @@ for scene in $scenes; do
     ratio=$(awk -v a="$to" -v b="$tn" 'BEGIN { printf "%.3f", a / b }')
     printf '%-12s %-7s %9.2f %9.2f %7.2f× %10.1f %10.1f\n' "$name" "$algo" "$to" "$tn" "$ratio" \
       "$(awk -v m="$mo" 'BEGIN { print m / 1024 }')" "$(awk -v m="$mn" 'BEGIN { print m / 1024 }')"
-    logsum=$(awk -v s="$logsum" -v r="$ratio" 'BEGIN { print s + log(r) }')
+    logsum=$(add_log "$logsum" "$ratio")
     count=$((count + 1))
   done
 done
-awk -v s="$logsum" -v n="$count" 'BEGIN { printf "geometric mean speed-up over %d runs: %.3f×\n", n, exp(s / n) }'
+echo "geometric mean speed-up over $count runs: $(geomean "$logsum" "$count")×"

@@ -79,18 +79,19 @@ for scene in $scenes; do
       ceil=$(awk -v a="$t1" -v b="$tp" 'BEGIN { printf "%.3f", 2 * a / b }')
       share=$(awk -v r="$ratio" -v c="$ceil" 'BEGIN { printf "%.3f", r / c }')
       printf ' %9.2f %7.2f× %9.1f%%' "$tp" "$ceil" "$(awk -v s="$share" 'BEGIN { print 100 * s }')"
-      logceil=$(awk -v s="$logceil" -v r="$ceil" 'BEGIN { print s + log(r) }')
-      logshare=$(awk -v s="$logshare" -v r="$share" 'BEGIN { print s + log(r) }')
+      logceil=$(add_log "$logceil" "$ceil")
+      logshare=$(add_log "$logshare" "$share")
     fi
     printf '\n'
-    logsum=$(awk -v s="$logsum" -v r="$ratio" 'BEGIN { print s + log(r) }')
-    logmin=$(awk -v s="$logmin" -v r="$rmin" 'BEGIN { print s + log(r) }')
+    logsum=$(add_log "$logsum" "$ratio")
+    logmin=$(add_log "$logmin" "$rmin")
     count=$((count + 1))
   done
 done
-awk -v s="$logsum" -v n="$count" 'BEGIN { printf "geometric mean scaling over %d runs: %.3f× (medians)\n", n, exp(s / n) }'
-awk -v s="$logmin" -v n="$count" 'BEGIN { printf "geometric mean scaling over %d runs: %.3f× (fastest runs)\n", n, exp(s / n) }'
+echo "geometric mean scaling over $count runs: $(geomean "$logsum" "$count")× (medians)"
+echo "geometric mean scaling over $count runs: $(geomean "$logmin" "$count")× (fastest runs)"
 if [[ $ceiling == 1 ]]; then
-  awk -v s="$logceil" -v n="$count" 'BEGIN { printf "geometric mean ceiling (two one-thread runs at once): %.3f×\n", exp(s / n) }'
-  awk -v s="$logshare" -v n="$count" 'BEGIN { printf "geometric mean share of the ceiling: %.1f%%\n", 100 * exp(s / n) }'
+  echo "geometric mean ceiling (two one-thread runs at once): $(geomean "$logceil" "$count")×"
+  share=$(awk -v g="$(geomean "$logshare" "$count")" 'BEGIN { printf "%.1f", 100 * g }')
+  echo "geometric mean share of the ceiling: $share%"
 fi

@@ -254,17 +254,18 @@ pub fn light_subpath_with<S: SampleStream>(
 
 /// The two subpaths of the single strategy `(s, t)` (Hachisuka et al. 2014's technique, a
 /// technique chart of charted MLT): a camera subpath of `t` vertices into `camera` and a light
-/// subpath of `s` vertices into `light`. `false` when the strategy contributes nothing because a
-/// walk ended early, the camera end cannot take a connection (a delta-only BSDF, for `s > 0`), or
-/// there is no camera vertex (`t = 0`: no strategy connects to the lens by chance);
-/// the light subpath is then not traced at all when the camera subpath already decided it (a
-/// third to a half of MMLT's evaluations, bootstrap included, on `veach-bidir` and the built-in
-/// scenes but `door`, whose camera paths stay inside its room: 0.25% there), and `light` is left
-/// as it was. Where the strategy can contribute, both walks read
-/// the stream as before, so they are the same subpaths. A stopped evaluation only leaves numbers
-/// unread, in a candidate that is then rejected (its value is zero) and whose numbers come from
-/// its own generator, or in a bootstrap sample of its own seed: the chains and images are bit for
-/// bit those of tracing both walks every time.
+/// subpath of `s` vertices into `light`. `false` when the strategy contributes nothing: a walk
+/// ended early, the camera end cannot take a connection (a delta-only BSDF, for `s > 0`), or
+/// there is no camera vertex (`t = 0`: no strategy connects to the lens by chance).
+///
+/// The camera subpath is traced first, and the light subpath not at all when the camera subpath
+/// has already decided (`light` is then left as it was): a third to a half of MMLT's
+/// evaluations, bootstrap included, on `veach-bidir` and the built-in scenes but `door`, whose
+/// camera paths stay inside its room (0.25% there). Where the strategy can contribute, both walks
+/// read the stream as before. A stopped evaluation only leaves numbers unread, in a candidate that
+/// is then rejected (its value is zero) and whose numbers come from its own generator, or in a
+/// bootstrap sample of its own seed: chains and images are bit for bit those of tracing both
+/// walks every time.
 pub fn technique_subpaths<S: SampleStream>(
     scene: &Scene,
     stream: &mut S,
