@@ -587,6 +587,7 @@ fn compact_bvh_renders_the_same_image() {
         n
     };
     assert!(references(&["--compact-bvh"]) < references(&[]));
+    let _ = std::fs::remove_dir_all(&d);
 }
 
 /// `--sampler` reaches the pass-based estimators: the report names it, the two samplers render

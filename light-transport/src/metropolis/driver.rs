@@ -88,6 +88,15 @@ pub trait Method: Sync {
     fn large_steps(&self) -> Option<(usize, f64)> {
         None
     }
+    /// `d = b q` per independent group for [`Method::large_steps`] ([`LargeStepMis::density`]):
+    /// the normalisation times the density of the independent proposal in the measure in which
+    /// the importance `I` is the state's density, given the bootstrap's normalisation per group
+    /// and in all (`b`). By default a large step's in primary space, of unit density within its
+    /// group: `b_g`.
+    fn large_step_density(&self, group_normalisation: &[f64], b: f64) -> Vec<f64> {
+        let _ = b;
+        group_normalisation.to_vec()
+    }
     /// The move kind whose candidates are drawn as bootstrap samples are (Kelemen's large step;
     /// path-space MLT's new path), whether or not they are also counted by
     /// [`Method::large_steps`]: the driver adds their bootstrap weight
@@ -455,13 +464,14 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let b = stats.normalisation;
     // The bootstrap's normalisation per group, fixed for the weights of the whole run.
     let group_b = stats.group_normalisation.clone();
+    let density = method.large_step_density(&group_b, b);
     let large_steps = method
         .large_steps()
         .filter(|&(_, p)| p > 0.0)
         .map(|(kind, probability)| LargeStepMis {
             kind,
             probability,
-            group_normalisation: &group_b,
+            density: &density,
         });
     // Bootstrap sums and counts, to which the chains' independent samples are added.
     let tally_kind = method

@@ -42,6 +42,13 @@ pub trait Recordable {
             weight: self.contribution().importance,
         }
     }
+    /// As a candidate of the large steps ([`LargeStepMis`]): the probability with which its move
+    /// kind was chosen, given the state it was proposed from, when that depends on the state
+    /// (path-space mutations chosen by suitability). `None` (the default): the declared
+    /// [`LargeStepMis::probability`], the same from every state.
+    fn proposal_probability(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// Where an independent sample falls in the bootstrap, and its weight there.
@@ -186,14 +193,26 @@ impl NormalisationTally {
 /// `b / b_g`, the chain's share of the image) with the expected-value weight, and a large step's
 /// candidate deposits that once more: where `I ≪ p b_g` the image comes from the independent
 /// samples, where `I ≫ p b_g` from the chain.
+///
+/// In general a state `x` deposits `b / (I(x) + p d(x))` with `d(x) = b q(x)`, `q` the independent
+/// proposal's density in the measure in which `I` is the state's (unnormalised) density and `b`
+/// the normalisation of the chain that contains `x`; [`LargeStepMis::density`] holds `d` per
+/// independent group ([`Recordable::independent_weight`]). A large step in primary space has
+/// `q = 1` within its group: `d = b_g`. Path-space MLT's new path (Veach & Guibas 1997 §5.3.3)
+/// has `q = P_len(k) / (k + 1)` against `I = f / Σ_s p_s` (README). Where the chance of an
+/// independent proposal depends on the state it is made from (`p(x)`: a mixture choosing its
+/// mutations by suitability), its candidate's second deposit is multiplied by `p / p(x)`
+/// ([`Recordable::proposal_probability`]), which keeps the large steps' estimate unbiased; `p` is
+/// then any constant near the mean rate (the weights sum to one for every `p`).
 #[derive(Clone, Copy, Debug)]
 pub struct LargeStepMis<'a> {
     /// The move kind of the large steps.
     pub kind: usize,
     /// Their probability per proposal.
     pub probability: f64,
-    /// The normalisation `b_g` of each group.
-    pub group_normalisation: &'a [f64],
+    /// `d = b q` per independent group: the normalisation times the independent proposal's
+    /// density (for large steps in primary space `b_g`, the group's normalisation).
+    pub density: &'a [f64],
 }
 
 impl LargeStepMis<'_> {
@@ -209,7 +228,7 @@ impl LargeStepMis<'_> {
 }
 
 impl<R> ExpectedValue<'_, R> {
-    /// `b / I` (or, with large steps combined, `b / (I + p b_g)`) for a state of importance
+    /// `b / I` (or, with large steps combined, `b / (I + p d)`) for a state of importance
     /// `i`, or `None` if the state deposits nothing.
     #[inline]
     fn scale<S: Recordable>(&self, s: &S) -> Option<f64> {
@@ -218,14 +237,28 @@ impl<R> ExpectedValue<'_, R> {
             return None;
         }
         // A state's group is one of the driver's (a method's invariant, not input).
-        let independent = self
-            .large_steps
-            .map_or(0.0, |l| l.probability * l.group_normalisation[s.group()]);
+        let independent = self.large_steps.map_or(0.0, |l| {
+            let d = l.density.get(s.independent_weight().group).copied();
+            l.probability * d.unwrap_or(0.0)
+        });
         Some(self.b / (i + independent))
     }
 
+    /// How many times a large step's candidate `s` counts in the large steps' own estimate: once,
+    /// or `p / p(x)` when the chance of the large step depended on the state it was proposed
+    /// from.
+    #[inline]
+    fn independent_factor<S: Recordable>(&self, s: &S) -> f64 {
+        let declared = self.large_steps.map_or(1.0, |l| l.probability);
+        match s.proposal_probability() {
+            Some(p) if p > 0.0 => declared / p,
+            Some(_) => 0.0,
+            None => 1.0,
+        }
+    }
+
     /// Deposit `w` times the state's contribution to the chain's estimate, scaled by `b / I`
-    /// (or `b / (I + p b_g)`).
+    /// (or `b / (I + p d)`).
     #[inline]
     pub fn record<S: Recordable>(&mut self, s: &S, w: f64)
     where
@@ -258,15 +291,22 @@ impl<S: Recordable, R: Recorder<S>> Observer<S> for ExpectedValue<'_, R> {
         }
         let large = made && self.large_steps.is_some_and(|l| l.kind == kind);
         self.record(current, 1.0 - a);
+        let independent = if large {
+            self.independent_factor(proposed)
+        } else {
+            0.0
+        };
         if self.tally.is_none() {
-            self.record(proposed, a + if large { 1.0 } else { 0.0 });
+            self.record(proposed, a + independent);
             return;
         }
         self.record(proposed, a);
         // The large step's candidate once more, as the large steps' own estimate: not the
         // chain's, so its scale stays (`b_g` enters it only through the balance heuristic).
-        if large && let Some(k) = self.scale(proposed) {
-            self.recorder.record(proposed, k);
+        if independent > 0.0
+            && let Some(k) = self.scale(proposed)
+        {
+            self.recorder.record(proposed, k * independent);
         }
     }
 }
@@ -371,7 +411,7 @@ mod tests {
             large_steps: Some(LargeStepMis {
                 kind: 1,
                 probability: 0.5,
-                group_normalisation: &b,
+                density: &b,
             }),
             tally: None,
         };
@@ -382,6 +422,63 @@ mod tests {
         // Each deposit is 2 · b / (I + p b_0) = 2 / 2.5.
         let values: Vec<f64> = splats.iter().map(|s| s.1.max_component()).collect();
         assert_eq!(values, [0.8; 4]);
+    }
+
+    /// A candidate in a group of its own (path space: its length) whose large step was chosen
+    /// with a probability of its own.
+    struct Chosen(Contribution, usize, Option<f64>);
+
+    impl Recordable for Chosen {
+        fn contribution(&self) -> &Contribution {
+            &self.0
+        }
+        fn independent_weight(&self) -> BootstrapSample {
+            BootstrapSample {
+                group: self.1,
+                stratum: 0,
+                weight: self.0.importance,
+            }
+        }
+        fn proposal_probability(&self) -> Option<f64> {
+            self.2
+        }
+    }
+
+    /// The balance heuristic takes `d` of each state's independent group, and a large step's
+    /// candidate chosen with probability `p(x)` counts `p / p(x)` times in the large steps' own
+    /// estimate (once when it reports none, not at all when it reports 0), with a tally and
+    /// without.
+    #[test]
+    fn large_steps_use_the_density_of_the_group_and_the_chance_of_the_step() {
+        let d = [1.0, 3.0];
+        let state = |group, chosen| Chosen(state().0, group, chosen);
+        for tally in [false, true] {
+            let mut counted = NormalisationTally::new(1, &[1, 1]);
+            let mut splats = Vec::new();
+            let mut rec = ExpectedValue {
+                recorder: &mut splats,
+                b: 1.0,
+                large_steps: Some(LargeStepMis {
+                    kind: 1,
+                    probability: 0.5,
+                    density: &d,
+                }),
+                tally: tally.then_some(&mut counted),
+            };
+            let x = state(0, None);
+            // 2 · b / (I + p d_g): 0.8 in group 0, 2 / 3.5 in group 1.
+            let (k0, k1) = (0.8, 2.0 / 3.5);
+            for (y, factor) in [
+                (state(1, Some(0.25)), 2.0),
+                (state(1, None), 1.0),
+                (state(1, Some(0.0)), 0.0),
+            ] {
+                rec.observe(&x, &y, 0.5, 1);
+                let got: f64 = rec.recorder.drain(..).map(|s| s.1.max_component()).sum();
+                let expected = 0.5 * k0 + 0.5 * k1 + factor * k1;
+                assert!((got - expected).abs() < 1e-12, "{tally} {factor}: {got}");
+            }
+        }
     }
 
     /// With a tally the chains' deposits go to their group's layer and the large step's second
@@ -398,7 +495,7 @@ mod tests {
             large_steps: Some(LargeStepMis {
                 kind: 1,
                 probability: 0.5,
-                group_normalisation: &b,
+                density: &b,
             }),
             tally: Some(&mut tally),
         };

@@ -35,6 +35,9 @@ pub struct PathMlt {
     tuning: RwLock<Option<LambdaTuning>>,
     /// How the warm-up measured `Δθ` of the specular probability (glossy chains).
     pilot: RwLock<Option<NormalChange>>,
+    /// Whether new paths also count as independent samples of the image
+    /// ([`PathMlt::with_large_step_mis`]).
+    large_step_mis: bool,
 }
 
 impl PathMlt {
@@ -46,8 +49,20 @@ impl PathMlt {
             walks: Mutex::new(WalkStats::default()),
             tuning: RwLock::new(None),
             pilot: RwLock::new(None),
+            large_step_mis: false,
             mutations,
         })
+    }
+
+    /// Count each new path twice, as a proposal and as an independent sample of the image,
+    /// combined with the chains by the balance heuristic (Kelemen et al. 2002 §4 carried over to
+    /// path space; [`crate::metropolis::record::LargeStepMis`]): a state `x` of `k` edges
+    /// deposits `b / (I + p b P_len(k) / (k + 1))`, and a new path once more divided by the
+    /// chance `p(x) / p` of the new-path mutation from the state it was proposed from. Off by
+    /// default (expected values alone).
+    pub fn with_large_step_mis(mut self, on: bool) -> Self {
+        self.large_step_mis = on;
+        self
     }
 
     /// The manifold walks of the chains so far (the manifold perturbation's).
@@ -194,6 +209,26 @@ impl Method for PathMlt {
         true
     }
 
+    fn large_steps(&self) -> Option<(usize, f64)> {
+        // The new-path mutation's share of the selection weights: its chance under fixed
+        // selection, about its mean chance under suitability selection (any constant keeps the
+        // estimate unbiased; `LargeStepMis`).
+        let kind = self
+            .independent_proposals()
+            .filter(|_| self.large_step_mis)?;
+        let p = (self.mutations.probabilities).probability(super::new_path::REGISTRATION.name);
+        (p > 0.0).then_some((kind, p))
+    }
+
+    fn large_step_density(&self, _group_normalisation: &[f64], b: f64) -> Vec<f64> {
+        // A state of `k = g + 1` edges: a new path has density `P_len(k) / (k + 1)` against
+        // `I = f / Σ_s p_s` (the new path's `T = P_len(k) / (k + 1) · Σ_s p_s`).
+        let new_path = self.new_path();
+        (0..self.mutations.max_edges)
+            .map(|g| b * new_path.probability(g + 1) / (g + 2) as f64)
+            .collect()
+    }
+
     fn warm_up(&self, scene: &Scene, chains: &[Chain<PathState>], seed: u64) -> Result<()> {
         let m = &self.mutations;
         let manifold = m
@@ -228,6 +263,9 @@ impl Method for PathMlt {
 
     fn details(&self) -> Vec<String> {
         let mut out = Vec::new();
+        if self.large_step_mis {
+            out.push("new path counted twice: as a proposal and as an independent sample (balance heuristic; --large-step-mis)".into());
+        }
         if let Some(t) = self.tuning() {
             out.push(format!("lambda     {t}"));
         }

@@ -19,7 +19,7 @@ use crate::scene::Scene;
 use crate::{Error, Result};
 use mcmc_core::kernel::Observer;
 use mcmc_core::proposals::{Mixture, MixtureRule, Selection};
-use mcmc_core::{Chain, ChainRng, Kernel, MetropolisHastings};
+use mcmc_core::{Chain, ChainRng, Kernel, MetropolisHastings, Proposal, Proposed};
 use std::fmt;
 use std::str::FromStr;
 use std::sync::Arc;
@@ -474,6 +474,10 @@ impl Mutations {
     ) {
         chain.ln_density = 0.0;
         let min_edges = self.min_edges;
+        let proposal = ChoiceRecording {
+            mixture: proposal,
+            kind: index_of(super::new_path::REGISTRATION.name),
+        };
         let mut mh =
             MetropolisHastings::new(|s: &PathState| ln_target_from(min_edges, s), proposal);
         for _ in 0..n {
@@ -484,6 +488,46 @@ impl Mutations {
     /// Statistics names (the registered mutations).
     pub fn kinds() -> Vec<String> {
         names()
+    }
+}
+
+/// The mixture of [`Mutations::run`], which also writes into each candidate of move kind `kind`
+/// (the new-path mutation) the probability with which the mixture chose it from the current state
+/// ([`PathState::chosen_with`]): with suitability selection it depends on the state, and the
+/// large steps' estimate divides by it ([`crate::metropolis::record::LargeStepMis`]).
+struct ChoiceRecording<'p, 'a> {
+    mixture: &'p Mixture<'a, PathState>,
+    kind: Option<usize>,
+}
+
+impl Proposal<PathState> for ChoiceRecording<'_, '_> {
+    fn propose(&self, x: &PathState, y: &mut PathState, rng: &mut ChainRng) -> Proposed {
+        let p = self.mixture.propose(x, y, rng);
+        if p.failure.is_none() && Some(p.kind) == self.kind {
+            y.chosen_with = Some(self.mixture.ln_selection_of_kind(x, p.kind).exp());
+        }
+        p
+    }
+    fn ln_transition_density(&self, from: &PathState, to: &PathState) -> Option<f64> {
+        self.mixture.ln_transition_density(from, to)
+    }
+    fn ln_pair_densities(&self, x: &PathState, y: &PathState) -> Option<(f64, f64)> {
+        self.mixture.ln_pair_densities(x, y)
+    }
+    fn suitability(&self, x: &PathState) -> f64 {
+        self.mixture.suitability(x)
+    }
+    fn ln_move_density(&self, from: &PathState, to: &PathState, kind: usize) -> Option<f64> {
+        self.mixture.ln_move_density(from, to, kind)
+    }
+    fn outcomes(&self, x: &PathState) -> Option<Vec<mcmc_core::Outcome<PathState>>> {
+        self.mixture.outcomes(x)
+    }
+    fn kinds(&self) -> Vec<String> {
+        self.mixture.kinds()
+    }
+    fn kind_count(&self) -> usize {
+        self.mixture.kind_count()
     }
 }
 

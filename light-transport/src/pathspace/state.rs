@@ -74,6 +74,10 @@ pub struct PathState {
     pub change: Option<Change>,
     /// The registered mutations' suitabilities for this path (filled on use).
     pub suitability: SuitabilityCache,
+    /// For a candidate of the new-path mutation: the probability with which the mixture chose
+    /// that mutation from the state it was proposed from ([`Recordable::proposal_probability`];
+    /// set by [`super::mutations::Mutations::run`], stale on other candidates).
+    pub chosen_with: Option<f64>,
 }
 
 impl Clone for PathState {
@@ -84,6 +88,7 @@ impl Clone for PathState {
             contribution: self.contribution.clone(),
             change: self.change,
             suitability: self.suitability.clone(),
+            chosen_with: self.chosen_with,
         }
     }
 
@@ -98,6 +103,7 @@ impl Clone for PathState {
         self.contribution.importance = source.contribution.importance;
         self.change = source.change;
         self.suitability.clone_from(&source.suitability);
+        self.chosen_with = source.chosen_with;
     }
 }
 
@@ -120,6 +126,10 @@ impl Recordable for PathState {
             stratum: 0,
             weight: (k + 1) as f64 * self.contribution.importance,
         }
+    }
+
+    fn proposal_probability(&self) -> Option<f64> {
+        self.chosen_with
     }
 }
 

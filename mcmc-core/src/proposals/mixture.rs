@@ -166,6 +166,19 @@ impl<'a, S> Mixture<'a, S> {
         self.ln_selection_in(x).into_vec()
     }
 
+    /// `ln P_k(x)` of the component `k` whose move kinds include `kind` (as [`Proposal::kinds`]
+    /// numbers them): the probability that a proposal from `x` is made by that component. Under
+    /// suitability selection it depends on `x`; an observer that weighs a component's candidates
+    /// by the inverse of their chance of being drawn needs it. `−∞` for a kind out of range.
+    pub fn ln_selection_of_kind(&self, x: &S, kind: usize) -> f64 {
+        let total: usize = self.kind_count();
+        if kind >= total {
+            return f64::NEG_INFINITY;
+        }
+        let k = self.kind_offsets.partition_point(|&o| o <= kind) - 1;
+        self.ln_selection_in(x)[k]
+    }
+
     /// [`Mixture::ln_selection`] on the stack (the acceptance ratio asks for it twice a step).
     fn ln_selection_in(&self, x: &S) -> PerComponent {
         let Some(w) = self.suited(x) else {
@@ -400,6 +413,68 @@ mod tests {
         let w = m.weights();
         assert!((w[0] - 0.75).abs() < 1e-15 && (w[1] - 0.25).abs() < 1e-15);
         assert!(m.check_combined(&vec![0.0], &vec![1.0]).is_ok());
+    }
+
+    /// A move that suits states with a positive first coordinate only.
+    struct PositiveOnly;
+
+    impl Proposal<Vec<f64>> for PositiveOnly {
+        fn propose(&self, _: &Vec<f64>, _: &mut Vec<f64>, _: &mut ChainRng) -> Proposed {
+            Proposed::SYMMETRIC
+        }
+        fn suitability(&self, x: &Vec<f64>) -> f64 {
+            if x[0] > 0.0 { 1.0 } else { 0.0 }
+        }
+    }
+
+    /// The selection probability of a kind is its component's: fixed, or under suitability
+    /// selection renormalised over the components that suit the state; kinds of a nested
+    /// mixture map to the nested mixture's component; kinds out of range have none.
+    #[test]
+    fn selection_of_a_kind_is_its_components() {
+        let nested = || -> Box<dyn Proposal<Vec<f64>> + Send + Sync> {
+            Box::new(
+                Mixture::new(
+                    vec![
+                        (1.0, Box::new(GaussianRandomWalk::new(0.1).unwrap())),
+                        (1.0, Box::new(GaussianRandomWalk::new(1.0).unwrap())),
+                    ],
+                    MixtureRule::Combined,
+                )
+                .unwrap(),
+            )
+        };
+        for selection in [Selection::Fixed, Selection::Suitability] {
+            let m: Mixture<'_, Vec<f64>> = Mixture::new(
+                vec![
+                    (2.0, nested()),
+                    (1.0, Box::new(PositiveOnly)),
+                    (1.0, Box::new(GaussianRandomWalk::new(0.5).unwrap())),
+                ],
+                MixtureRule::PerComponent,
+            )
+            .unwrap()
+            .with_selection(selection);
+            let p = |x: f64, kind| m.ln_selection_of_kind(&vec![x], kind).exp();
+            // Kinds 0 and 1 are the nested mixture's, 2 the positive-only move's, 3 the last.
+            let (nested_p, last_p) = match selection {
+                Selection::Fixed => (0.5, 0.25),
+                Selection::Suitability => (2.0 / 3.0, 1.0 / 3.0),
+            };
+            for kind in [0, 1] {
+                assert!((p(1.0, kind) - 0.5).abs() < 1e-15, "{selection:?}");
+                assert!((p(-1.0, kind) - nested_p).abs() < 1e-15, "{selection:?}");
+            }
+            assert!((p(1.0, 2) - 0.25).abs() < 1e-15);
+            let unsuited = if selection == Selection::Fixed {
+                0.25
+            } else {
+                0.0
+            };
+            assert_eq!(p(-1.0, 2), unsuited);
+            assert!((p(-1.0, 3) - last_p).abs() < 1e-15);
+            assert_eq!(p(1.0, 4), 0.0);
+        }
     }
 
     #[test]

@@ -13,7 +13,11 @@ pub const ENTRY: Entry = Entry {
     build: |_, c, a| {
         let p = &a.pathspace;
         let mutations = p.mutations(c, &a.metropolis, &p.memlt_mutations)?;
-        a.metropolis
-            .renderer(PathMlt::new(mutations)?, c.heuristic, c.max_edges)
+        a.metropolis.renderer(
+            PathMlt::new(mutations)?
+                .with_large_step_mis(a.metropolis.large_step_mis.unwrap_or(false)),
+            c.heuristic,
+            c.max_edges,
+        )
     },
 };

@@ -13,7 +13,11 @@ pub const ENTRY: Entry = Entry {
         let mutations = a
             .pathspace
             .mutations(c, &a.metropolis, &a.pathspace.mutations)?;
-        a.metropolis
-            .renderer(PathMlt::new(mutations)?, c.heuristic, c.max_edges)
+        a.metropolis.renderer(
+            PathMlt::new(mutations)?
+                .with_large_step_mis(a.metropolis.large_step_mis.unwrap_or(false)),
+            c.heuristic,
+            c.max_edges,
+        )
     },
 };

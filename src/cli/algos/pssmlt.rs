@@ -17,7 +17,7 @@ pub const ENTRY: Entry = Entry {
             bdpt,
             kelemen: m.kelemen()?,
             importance: m.importance(),
-            large_step_mis: m.large_step_mis,
+            large_step_mis: m.large_step_mis.unwrap_or(true),
             direct_apart: false,
         };
         m.renderer(method, c.heuristic, c.max_edges)
