@@ -42,7 +42,7 @@ pub struct MetropolisArgs {
     /// image, combined with the chains by the balance heuristic (Kelemen et al. 2002; at equal
     /// time 0.92–0.96x the RMSE of false on veach-bidir and door, within noise on the other
     /// built-ins; README). MLT and MEMLT (default false): new paths likewise (0.89–1.06x at equal
-    /// time, 1.00x in the geometric mean; README). false: expected values alone.
+    /// time, geometric mean 0.99x; README). false: expected values alone.
     #[arg(long, action = clap::ArgAction::Set)]
     pub large_step_mis: Option<bool>,
     /// PSSMLT, MMLT, MLT, MEMLT, CMLT, ERPT and MEPT: samples per pixel (with --spp) of a pass

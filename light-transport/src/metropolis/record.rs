@@ -3,7 +3,7 @@
 //! the current state — each weighted by `b / I`, so a chain whose states have density `I / b`
 //! deposits the image. PSSMLT and MMLT also count their large steps as independent samples of the
 //! image, combined with the chain by the balance heuristic (Kelemen et al. 2002 §4;
-//! [`LargeStepMis`]). *What* a state deposits is the recorder's business: splats on the film for
+//! [`LargeStepMis`]), and path-space MLT can count its new paths so. *What* a state deposits is the recorder's business: splats on the film for
 //! the image-space methods, photons at storage points for Metropolis photon sampling.
 //!
 //! The driver gives each group of chains its own [`Sink::Chunk`] per round, fills them in
