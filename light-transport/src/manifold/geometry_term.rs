@@ -93,9 +93,20 @@ pub fn tangent_map(chain: &[ChainVertex]) -> Option<(Mat2, Mat2)> {
     ))
 }
 
-/// `|cos|` between the unit direction `w` and the geometric normal of `v`.
-fn cos_at(v: &ChainVertex, w: DVec3) -> f64 {
-    v.point.n.dot(w).abs()
+/// The ordinary geometry term seen from `near`, whose `|cos|` toward `far` is `cos_near`:
+/// `cos_near |n_far · w| / |far − near|²` (`w` the unit direction from `near` to `far`,
+/// `n_far` the geometric normal there); `None` for coincident points. The first factor of
+/// [`generalized_geometry`], and all of it for a chain without specular vertices: path-space
+/// code with two plain vertices calls it without building chain vertices.
+#[inline]
+pub fn ordinary_geometry(near: DVec3, cos_near: f64, far: DVec3, n_far: DVec3) -> Option<f64> {
+    let d = far - near;
+    let d2 = d.length_squared();
+    if !(d2 > 0.0) {
+        return None;
+    }
+    let w = d / d2.sqrt();
+    Some(cos_near * n_far.dot(w).abs() / d2)
 }
 
 /// The generalised geometry term `G(x_0 ↔ … ↔ x_{m+1})` of eq. 9 from the first vertex's side:
@@ -103,13 +114,9 @@ fn cos_at(v: &ChainVertex, w: DVec3) -> f64 {
 /// (1 for a point without a surface). The ordinary geometry term when the chain has no specular
 /// vertex. 0 when the chain is singular (a caustic: the term is infinite there).
 pub fn generalized_geometry(chain: &[ChainVertex], cos_first: f64) -> f64 {
-    let d = chain[1].p() - chain[0].p();
-    let d2 = d.length_squared();
-    if !(d2 > 0.0) {
+    let Some(g) = ordinary_geometry(chain[0].p(), cos_first, chain[1].p(), chain[1].point.n) else {
         return 0.0;
-    }
-    let w = d / d2.sqrt();
-    let g = cos_first * cos_at(&chain[1], w) / d2;
+    };
     if chain.len() == 2 {
         return g;
     }
@@ -124,13 +131,14 @@ pub fn generalized_geometry(chain: &[ChainVertex], cos_first: f64) -> f64 {
 /// symmetry the tests check.
 pub fn generalized_geometry_reverse(chain: &[ChainVertex], cos_last: f64) -> f64 {
     let n = chain.len();
-    let d = chain[n - 2].p() - chain[n - 1].p();
-    let d2 = d.length_squared();
-    if !(d2 > 0.0) {
+    let Some(g) = ordinary_geometry(
+        chain[n - 1].p(),
+        cos_last,
+        chain[n - 2].p(),
+        chain[n - 2].point.n,
+    ) else {
         return 0.0;
-    }
-    let w = d / d2.sqrt();
-    let g = cos_last * cos_at(&chain[n - 2], w) / d2;
+    };
     if n == 2 {
         return g;
     }

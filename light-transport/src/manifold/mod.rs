@@ -26,7 +26,8 @@ pub mod walk;
 pub use chain::{ChainVertex, Interaction, scatter};
 pub use constraint::{Blocks, constraint, constraint_in, jacobian_blocks};
 pub use geometry_term::{
-    ChainJacobian, chain_jacobian, generalized_geometry, generalized_geometry_reverse, tangent_map,
+    ChainJacobian, chain_jacobian, generalized_geometry, generalized_geometry_reverse,
+    ordinary_geometry, tangent_map,
 };
 pub use specular_probability::SpecularProbability;
 pub use tridiagonal::BlockTridiagonal;

@@ -70,7 +70,7 @@ use crate::light::LightKind;
 use crate::manifold::{
     ChainVertex, Interaction, ManifoldSettings, NO_MATERIAL, SpecularProbability, VonMisesFisher,
     WalkStats, chain_jacobian, constraint, generalized_geometry, generalized_geometry_reverse,
-    scatter, walk_manifold, walk_reversibly,
+    ordinary_geometry, scatter, walk_manifold, walk_reversibly,
 };
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
@@ -999,13 +999,20 @@ fn chain_geometry(
     side: usize,
 ) -> f64 {
     let (lo, hi) = (from.min(to), from.max(to));
+    let v = &path.vertices;
+    if hi == lo + 1 {
+        // No specular vertex between: the ordinary geometry term, without chain vertices.
+        let far = if side == hi { lo } else { hi };
+        let w = direction(&v[side], &v[far]);
+        let cos = endpoint_cos(scene, &v[side], w);
+        return ordinary_geometry(v[side].p(), cos, v[far].p(), v[far].point.n).unwrap_or(0.0);
+    }
     let Some(chain) = (lo..=hi)
         .map(|i| chain_vertex(scene, path, i, i != lo && i != hi))
         .collect::<Option<Vec<_>>>()
     else {
         return 0.0;
     };
-    let v = &path.vertices;
     if side == hi {
         let w = direction(&v[hi], &v[hi - 1]);
         generalized_geometry_reverse(&chain, endpoint_cos(scene, &v[hi], w))
