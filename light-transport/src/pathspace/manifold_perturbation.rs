@@ -61,7 +61,7 @@
 //! success for pairs this mutation did not propose; [`super::Mutations::validate`] refuses it).
 
 use super::mutation::{Change, Mutation, MutationContext, Registration};
-use super::path::retrace;
+use super::path::arriving_throughput;
 use super::perturbation::{direction, follow_specular, refracts, scatters_diffusely};
 use super::state::PathState;
 use super::walk::trace;
@@ -755,11 +755,8 @@ fn light_side(scene: &Scene, path: &super::FullPath, lo: usize) -> Option<Rgb> {
             * scene.lights[light as usize].pdf_position();
         return Some(v[0].le(scene, &v[1]) * (1.0 / p));
     }
-    let mut sub: Vec<Vertex> = v[..=lo].to_vec();
-    if retrace(scene, &mut sub, TransportMode::Importance) <= lo {
-        return None;
-    }
-    Some(sub[lo].beta * vertex_factor(scene, path, lo))
+    let beta = arriving_throughput(scene, lo + 1, |i| &v[i], TransportMode::Importance)?;
+    Some(beta * vertex_factor(scene, path, lo))
 }
 
 /// The camera side of `path` from its kept vertex `hi`: `f_s(x_hi)` times the camera walk's
@@ -773,12 +770,8 @@ fn camera_side(scene: &Scene, path: &super::FullPath, hi: usize) -> Option<Rgb> 
             scene.camera.importance(v[k].p(), w).0 / scene.camera.pdf_lens(),
         ));
     }
-    let mut sub: Vec<Vertex> = v[hi..].iter().rev().cloned().collect();
-    let j = k - hi;
-    if retrace(scene, &mut sub, TransportMode::Radiance) <= j {
-        return None;
-    }
-    Some(sub[j].beta * vertex_factor(scene, path, hi))
+    let beta = arriving_throughput(scene, k - hi + 1, |i| &v[k - i], TransportMode::Radiance)?;
+    Some(beta * vertex_factor(scene, path, hi))
 }
 
 /// The strategies running `toward` on `path` with every glossy vertex free (the candidates for

@@ -220,10 +220,6 @@ impl FullPath {
 /// walks of [`crate::path`] would. Returns how many leading vertices are valid (a zero density
 /// cuts the subpath there); only those are written.
 pub fn retrace(scene: &Scene, sub: &mut [Vertex], mode: TransportMode) -> usize {
-    thread_local! {
-        // The walk's records, kept per thread (manifold and photon moves retrace per proposal).
-        static TRACED: std::cell::RefCell<Vec<Traced>> = const { std::cell::RefCell::new(Vec::new()) };
-    }
     TRACED.with_borrow_mut(|traced| {
         let valid = walk(scene, sub.len(), |i| &sub[i], mode, traced);
         for (v, t) in sub.iter_mut().zip(&traced[..valid]) {
@@ -233,6 +229,25 @@ pub fn retrace(scene: &Scene, sub: &mut [Vertex], mode: TransportMode) -> usize 
             v.pdf_rev = 0.0;
         }
         valid
+    })
+}
+
+thread_local! {
+    // The walk's records, kept per thread (manifold and photon moves retrace per proposal).
+    static TRACED: std::cell::RefCell<Vec<Traced>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// The throughput over density with which the walk over `at(0) … at(n − 1)` (`n ≥ 1`) arrives at
+/// its last vertex, as [`retrace`] of those vertices would write it there, with nothing copied or
+/// written; `None` when the walk does not reach it.
+pub fn arriving_throughput<'a>(
+    scene: &Scene,
+    n: usize,
+    at: impl Fn(usize) -> &'a Vertex,
+    mode: TransportMode,
+) -> Option<Rgb> {
+    TRACED.with_borrow_mut(|traced| {
+        (n > 0 && walk(scene, n, at, mode, traced) >= n).then(|| traced[n - 1].beta)
     })
 }
 
