@@ -185,6 +185,10 @@ pub enum Toward {
     Eye,
 }
 
+/// The strategies of a path ([`strategies`]): on the stack for paths of up to 15 edges, since the
+/// mutation lists them at every proposal, suitability and density.
+pub type Strategies = smallvec::SmallVec<[Strategy; 16]>;
+
 /// The three vertices of a perturbation (path indices).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Strategy {
@@ -280,7 +284,7 @@ impl<'a> ManifoldPerturbation<'a> {
 
     /// The strategies this direction can use on `x` with every glossy vertex free (the candidates
     /// for `x_a`; [`ManifoldPerturbation::classify`] then draws which glossy vertices join chains).
-    pub fn strategies(&self, x: &PathState) -> Vec<Strategy> {
+    pub fn strategies(&self, x: &PathState) -> Strategies {
         strategies(self.scene, &x.path, self.toward)
     }
 
@@ -779,9 +783,9 @@ fn camera_side(scene: &Scene, path: &super::FullPath, hi: usize) -> Option<Rgb> 
 /// and a further one `x_c` exists, excluding chains that start at a point light; and the position
 /// move of the endpoint on this direction's side (the lens toward the light when it has an
 /// aperture, an area light toward the eye).
-pub fn strategies(scene: &Scene, path: &super::FullPath, toward: Toward) -> Vec<Strategy> {
+pub fn strategies(scene: &Scene, path: &super::FullPath, toward: Toward) -> Strategies {
     let k = path.edges();
-    let mut out = Vec::new();
+    let mut out = Strategies::new();
     if k < 2 {
         return out;
     }
