@@ -54,6 +54,9 @@ type Component<'a, S> = Box<dyn Proposal<S> + Send + Sync + 'a>;
 pub struct Mixture<'a, S> {
     components: Vec<Component<'a, S>>,
     ln_weights: Vec<f64>,
+    /// `exp(ln_weights)`, computed once (suitability selection weighs every component at every
+    /// proposal, for the current state and the candidate).
+    weights: Vec<f64>,
     cumulative: Vec<f64>,
     kind_offsets: Vec<usize>,
     rule: MixtureRule,
@@ -115,6 +118,7 @@ impl<'a, S> Mixture<'a, S> {
         }
         Ok(Self {
             components: comps,
+            weights: ln_weights.iter().map(|l| l.exp()).collect(),
             ln_weights,
             cumulative,
             kind_offsets,
@@ -149,7 +153,7 @@ impl<'a, S> Mixture<'a, S> {
 
     /// Normalised selection probabilities `P_k`.
     pub fn weights(&self) -> Vec<f64> {
-        self.ln_weights.iter().map(|l| l.exp()).collect()
+        self.weights.clone()
     }
 
     /// The rule.
@@ -176,7 +180,16 @@ impl<'a, S> Mixture<'a, S> {
             return f64::NEG_INFINITY;
         }
         let k = self.kind_offsets.partition_point(|&o| o <= kind) - 1;
-        self.ln_selection_in(x)[k]
+        // `ln_selection_in(x)[k]`, without the other components' logarithms.
+        let Some(w) = self.suited(x) else {
+            return self.ln_weights[k];
+        };
+        let total: f64 = w.iter().sum();
+        if total > 0.0 {
+            (w[k] / total).ln()
+        } else {
+            f64::NEG_INFINITY
+        }
     }
 
     /// [`Mixture::ln_selection`] on the stack (the acceptance ratio asks for it twice a step).
@@ -204,14 +217,14 @@ impl<'a, S> Mixture<'a, S> {
             Selection::Suitability => Some(
                 self.components
                     .iter()
-                    .zip(&self.ln_weights)
+                    .zip(&self.weights)
                     // A component without weight is never chosen: its suitability is not asked
                     // (it may be costly, e.g. a path mutation finding its strategies).
-                    .map(|(c, lw)| {
-                        if *lw == f64::NEG_INFINITY {
+                    .map(|(c, &w)| {
+                        if w == 0.0 {
                             0.0
                         } else {
-                            lw.exp() * suitability(c.as_ref(), x)
+                            w * suitability(c.as_ref(), x)
                         }
                     })
                     .collect(),
