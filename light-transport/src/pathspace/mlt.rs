@@ -57,9 +57,9 @@ impl PathMlt {
     /// Count each new path twice, as a proposal and as an independent sample of the image,
     /// combined with the chains by the balance heuristic (Kelemen et al. 2002 §4 carried over to
     /// path space; [`crate::metropolis::record::LargeStepMis`]): a state `x` of `k` edges
-    /// deposits `b / (I + p b P_len(k) / (k + 1))`, and a new path once more divided by the
-    /// chance `p(x) / p` of the new-path mutation from the state it was proposed from. Off by
-    /// default (expected values alone).
+    /// deposits `b / (I + p b P_len(k) / (k + 1))`, and a new path deposits that once more, times
+    /// `p / p(x)` where `p(x)` is the chance of the new-path mutation from the state it was
+    /// proposed from. Off by default (expected values alone).
     pub fn with_large_step_mis(mut self, on: bool) -> Self {
         self.large_step_mis = on;
         self
@@ -216,7 +216,10 @@ impl Method for PathMlt {
         let kind = self
             .independent_proposals()
             .filter(|_| self.large_step_mis)?;
-        let p = (self.mutations.probabilities).probability(super::new_path::REGISTRATION.name);
+        let p = self
+            .mutations
+            .probabilities
+            .probability(super::new_path::REGISTRATION.name);
         (p > 0.0).then_some((kind, p))
     }
 
