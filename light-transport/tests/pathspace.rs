@@ -279,24 +279,32 @@ fn new_paths_counted_twice_converge_to_bdpt() {
     }
 }
 
+/// The parts of [`Method`] that the broken variants of path-space MLT below (a wrapper around a
+/// `PathMlt` in field 0) take from it unchanged.
+macro_rules! path_mlt_basics {
+    () => {
+        type State = PathState;
+        fn groups(&self) -> usize {
+            self.0.groups()
+        }
+        fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (PathState, f64) {
+            self.0.independent(scene, g, seed)
+        }
+        fn ln_density(&self, scene: &Scene, s: &PathState) -> f64 {
+            self.0.ln_density(scene, s)
+        }
+        fn bootstrap_done(&self, b: &[f64]) {
+            self.0.bootstrap_done(b)
+        }
+    };
+}
+
 /// Path-space MLT whose large steps' density `d = b P_len(k) / (k + 1)` is off by a factor (the
 /// two estimators' weights then no longer sum to one).
 struct WrongNewPathDensity(PathMlt, f64);
 
 impl Method for WrongNewPathDensity {
-    type State = PathState;
-    fn groups(&self) -> usize {
-        self.0.groups()
-    }
-    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (PathState, f64) {
-        self.0.independent(scene, g, seed)
-    }
-    fn ln_density(&self, scene: &Scene, s: &PathState) -> f64 {
-        self.0.ln_density(scene, s)
-    }
-    fn bootstrap_done(&self, b: &[f64]) {
-        self.0.bootstrap_done(b)
-    }
+    path_mlt_basics!();
     fn mutate<O: Observer<PathState>>(
         &self,
         scene: &Scene,
@@ -350,19 +358,7 @@ fn new_paths_counted_twice_with_a_wrong_density_are_caught() {
 struct ForgetsStrategyChoice(PathMlt);
 
 impl Method for ForgetsStrategyChoice {
-    type State = PathState;
-    fn groups(&self) -> usize {
-        self.0.groups()
-    }
-    fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (PathState, f64) {
-        self.0.independent(scene, g, seed)
-    }
-    fn ln_density(&self, scene: &Scene, s: &PathState) -> f64 {
-        self.0.ln_density(scene, s)
-    }
-    fn bootstrap_done(&self, b: &[f64]) {
-        self.0.bootstrap_done(b)
-    }
+    path_mlt_basics!();
     fn mutate<O: Observer<PathState>>(
         &self,
         scene: &Scene,
