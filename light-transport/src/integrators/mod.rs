@@ -37,7 +37,7 @@ use crate::film::Film;
 use crate::sampler::{PixelSampler, PixelStream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
-use mcmc_core::rng::uniform;
+use mcmc_core::rng::{Substreams, uniform};
 use std::time::{Duration, Instant};
 
 /// One sample of an unbiased estimator.
@@ -187,9 +187,16 @@ pub fn render<E: Estimator>(
 /// The stream of `pixel`'s sample in pass `pass` of a render with `sampling`, exactly as [`pass`]
 /// hands it to the estimator (so a tool can replay one sample of a render).
 pub fn pass_stream(sampling: Sampling, pass: u64, pixel: usize) -> PixelStream {
-    let key = pass_key(sampling.seed, pass);
-    let rng = mcmc_core::rng::substream(key, PASS_PURPOSE, pixel as u64);
-    PixelStream::new(sampling.sampler, sampling.seed, pass, pixel, rng)
+    pass_streams(sampling, pass)(pixel)
+}
+
+/// The streams of pass `pass`'s pixels ([`pass_stream`]), their generators keyed once.
+fn pass_streams(sampling: Sampling, pass: u64) -> impl Fn(usize) -> PixelStream {
+    let generators = Substreams::new(pass_key(sampling.seed, pass), PASS_PURPOSE);
+    move |pixel| {
+        let rng = generators.get(pixel as u64);
+        PixelStream::new(sampling.sampler, sampling.seed, pass, pixel, rng)
+    }
 }
 
 /// The key of pass `pass`'s per-pixel generators.
@@ -221,6 +228,8 @@ pub fn pass<E: Estimator>(
     let q = q.clamp(0.0, 1.0);
     let sampling = sampling.into();
     let key = pass_key(sampling.seed, pass);
+    let streams = pass_streams(sampling, pass);
+    let fractions = Substreams::new(key, FRACTION_PURPOSE);
     let run = |c: usize| -> ChunkResult {
         crate::accel::take_ray_count();
         let lo = (c * chunk).min(npix);
@@ -228,16 +237,10 @@ pub fn pass<E: Estimator>(
         let mut samples = Vec::with_capacity(hi - lo);
         let mut splats = Vec::new();
         for pixel in lo..hi {
-            if q < 1.0
-                && uniform(&mut mcmc_core::rng::substream(
-                    key,
-                    FRACTION_PURPOSE,
-                    pixel as u64,
-                )) >= q
-            {
+            if q < 1.0 && uniform(&mut fractions.get(pixel as u64)) >= q {
                 continue;
             }
-            let mut stream = pass_stream(sampling, pass, pixel);
+            let mut stream = streams(pixel);
             let v = estimator.sample(scene, pixel, &mut stream, &mut splats);
             samples.push((pixel, v));
         }
