@@ -221,19 +221,22 @@ impl Bidirectional {
         let splits = Self::splits(k, d, n);
         let a = uniform_index(uniform(rng), splits);
         let b = n - a;
-        with_vertex_buffers(|light, cam| {
-            // Light part.
-            if d.l >= 0 {
-                light.extend_from_slice(&xp.vertices[..=d.l as usize]);
-                if !extend(scene, light, a, TransportMode::Importance, rng) {
-                    return Err(Failure::Failed);
-                }
-            } else if a > 0 {
-                light.push(light_endpoint(scene, rng).ok_or(Failure::Failed)?);
-                if !extend(scene, light, a - 1, TransportMode::Importance, rng) {
-                    return Err(Failure::Failed);
-                }
+        // Light part, walked in the candidate itself.
+        let light = &mut y.path.vertices;
+        light.clear();
+        if d.l >= 0 {
+            light.extend_from_slice(&xp.vertices[..=d.l as usize]);
+            if !extend(scene, light, a, TransportMode::Importance, rng) {
+                return Err(Failure::Failed);
             }
+        } else if a > 0 {
+            light.push(light_endpoint(scene, rng).ok_or(Failure::Failed)?);
+            if !extend(scene, light, a - 1, TransportMode::Importance, rng) {
+                return Err(Failure::Failed);
+            }
+        }
+        let s = light.len();
+        with_vertex_buffers(|cam, _| {
             // Camera part (walk order: lens first).
             if d.m <= k {
                 cam.extend(xp.vertices[d.m..].iter().rev().cloned());
@@ -252,8 +255,7 @@ impl Bidirectional {
                 added: n,
                 pivot: 0,
             };
-            let (s, t) = (light.len(), cam.len());
-            if y.path.set_from_subpaths(scene, light, cam, s, t).is_some() {
+            if y.path.close_with_camera_subpath(scene, cam).is_some() {
                 y.finish_candidate(scene, importance, change, s);
             } else {
                 y.change = Some(change);

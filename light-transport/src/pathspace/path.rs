@@ -118,6 +118,31 @@ impl FullPath {
         self.vertices.clear();
         self.vertices.extend_from_slice(&light[..s]);
         self.vertices.extend(camera[..t].iter().rev().cloned());
+        self.mark_connection(scene, s)
+    }
+
+    /// [`FullPath::set_from_subpaths`] for a light subpath already in place: this path's
+    /// vertices are the light subpath's first `s`, and the whole of `camera` (in walk order) is
+    /// moved onto them, emptying it. A mutation that walks the light side in the candidate itself
+    /// copies its vertices once instead of twice.
+    pub fn close_with_camera_subpath(
+        &mut self,
+        scene: &Scene,
+        camera: &mut Vec<Vertex>,
+    ) -> Option<()> {
+        let s = self.vertices.len();
+        if camera.is_empty() || s + camera.len() < 2 {
+            camera.clear();
+            return None;
+        }
+        self.vertices.extend(camera.drain(..).rev());
+        self.mark_connection(scene, s)
+    }
+
+    /// The end of [`FullPath::set_from_subpaths`] once the vertices are in place: the light
+    /// endpoint of a path made by strategy `s = 0`, the two connection vertices marked
+    /// non-delta, and whether the path runs from a light to the camera.
+    fn mark_connection(&mut self, scene: &Scene, s: usize) -> Option<()> {
         if s == 0 {
             let v0 = &mut self.vertices[0];
             let (light, kind) = scene.light_at(v0.point.primitive)?;

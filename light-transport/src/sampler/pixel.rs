@@ -376,6 +376,50 @@ mod tests {
         }
     }
 
+    /// A Sobol number is uniform below the point's 32 bits too: where it falls inside its cell of
+    /// width 2^−32 (its random low bits) is uniform over 20 000 pixels, for both lanes of a set,
+    /// by a chi-square test on 64 bins (α = 1e-6 per position, 4 positions). Low bits left at a
+    /// constant fail it (a test of the test).
+    #[test]
+    fn the_bits_below_the_point_are_uniform() {
+        let n = 20_000usize;
+        // The 1 − 1e-6 quantile of chi-square with 63 degrees of freedom is about 130.
+        let uniform_in_cells = |inside: &[f64]| {
+            let mut bins = [0usize; 64];
+            for &f in inside {
+                bins[((f * 64.0) as usize).min(63)] += 1;
+            }
+            let e = inside.len() as f64 / 64.0;
+            bins.iter()
+                .map(|&b| (b as f64 - e).powi(2) / e)
+                .sum::<f64>()
+                < 130.0
+        };
+        for (s, p) in [
+            (CAMERA_STREAM, layout::FILM),
+            (CAMERA_STREAM, layout::FILM + 1),
+            (LIGHT_STREAM, layout::LIGHT_CHOICE),
+            (TECHNIQUE_STREAM, 2),
+        ] {
+            let inside: Vec<f64> = (0..n)
+                .map(|k| {
+                    let mut st = PixelStream::new(
+                        PixelSampler::Sobol,
+                        3,
+                        (k % 9) as u64,
+                        k,
+                        stream(3, k as u64),
+                    );
+                    st.start_stream(s);
+                    st.seek(p);
+                    (st.next_1d() * 2f64.powi(32)).fract()
+                })
+                .collect();
+            assert!(uniform_in_cells(&inside), "stream {s} position {p}");
+        }
+        assert!(!uniform_in_cells(&vec![0.0; n]));
+    }
+
     /// Numbers that share a set number and lane in different substreams (the film position and
     /// the position on the light; the first directions of the camera and light subpaths; the
     /// first next-event choice) are independent: their correlation over 20 000 pixels is within
