@@ -76,10 +76,9 @@ impl Substreams {
     }
 }
 
-/// A uniform draw in `[0, 1)` with 53 random bits.
+/// A uniform draw in `[0, 1)` with 53 random bits (from a [`ChainRng`] or any other generator).
 #[inline]
-pub fn uniform(rng: &mut ChainRng) -> f64 {
-    use rand::Rng;
+pub fn uniform<R: rand::Rng + ?Sized>(rng: &mut R) -> f64 {
     (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }
 

@@ -57,7 +57,7 @@ impl SmallStep {
 
     /// Perturb one coordinate in `[0,1)`.
     #[inline]
-    pub fn perturb(&self, u: f64, rng: &mut ChainRng) -> f64 {
+    pub fn perturb<R: rand::Rng + ?Sized>(&self, u: f64, rng: &mut R) -> f64 {
         PreparedStep::new(*self).perturb(u, rng)
     }
 
@@ -117,7 +117,7 @@ impl PreparedStep {
 
     /// Perturb one coordinate in `[0,1)` ([`SmallStep::perturb`]).
     #[inline]
-    pub fn perturb(&self, u: f64, rng: &mut ChainRng) -> f64 {
+    pub fn perturb<R: rand::Rng + ?Sized>(&self, u: f64, rng: &mut R) -> f64 {
         let d = match self.step {
             SmallStep::Exponential { s2, .. } => {
                 let mag = s2 * (-self.ln_ratio * uniform(rng)).exp();
