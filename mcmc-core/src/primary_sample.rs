@@ -63,7 +63,8 @@ pub struct PrimarySample {
 /// (Blackman and Vigna 2021), seeded by SplitMix64 from one number of the chain's [`ChainRng`]
 /// at every proposal. A candidate uses a few dozen numbers before it is accepted or dropped;
 /// keying a ChaCha8 generator per candidate and filling its four-block buffer cost more than the
-/// numbers themselves (about 4% of a multiplexed MLT render's instructions).
+/// numbers themselves (3.5% of the instructions of a multiplexed MLT render in this workspace's
+/// renderer).
 type CoordinateRng = rand_xoshiro::Xoshiro256PlusPlus;
 
 impl Clone for PrimarySample {
