@@ -34,6 +34,15 @@ pub fn substream(master_seed: u64, purpose: u64, index: u64) -> ChainRng {
     Substreams::new(master_seed, purpose).get(index)
 }
 
+/// The key of a purpose's generators: the purpose mixed into the master seed by SplitMix64's
+/// finaliser (streams stay selected by index).
+fn purpose_key(master_seed: u64, purpose: u64) -> u64 {
+    let mut z = master_seed ^ purpose.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
 /// The sub-streams of one purpose of a master seed, for a caller that makes many of them (a
 /// generator per pixel and pass): [`Substreams::get`] gives [`substream`]'s generators bit for
 /// bit, but keys the generator once and copies it, rather than expanding the seed through PCG32
@@ -54,14 +63,8 @@ pub struct Substreams {
 impl Substreams {
     /// The sub-streams of `purpose` of `master_seed`.
     pub fn new(master_seed: u64, purpose: u64) -> Self {
-        // Mix the purpose into the key with SplitMix64 finalisation; streams stay selected by
-        // index.
-        let mut z = master_seed ^ purpose.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
         Self {
-            keyed: ChainRng::seed_from_u64(z),
+            keyed: ChainRng::seed_from_u64(purpose_key(master_seed, purpose)),
         }
     }
 
@@ -151,11 +154,8 @@ mod tests {
         for (seed, purpose) in [(0, 0), (7, 0x5eed_0001), (u64::MAX, 3)] {
             let shared = Substreams::new(seed, purpose);
             for index in [0, 1, 2, 1000, u64::MAX] {
-                let mut z = seed ^ purpose.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-                z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-                z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-                z ^= z >> 31;
-                let (mut a, mut b) = (shared.get(index), stream(z, index));
+                let keyed = stream(purpose_key(seed, purpose), index);
+                let (mut a, mut b) = (shared.get(index), keyed);
                 for _ in 0..100 {
                     assert_eq!(a.next_u64(), b.next_u64(), "{seed} {purpose} {index}");
                 }
