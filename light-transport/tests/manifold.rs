@@ -5,7 +5,9 @@
 //! from the other end; the manifold walk against closed-form specular points (a planar mirror, a
 //! flat refracting interface) and its quadratic convergence on a curved mirror.
 
-use light_transport::geometry::{NO_SHADING, Ray, Sphere, SurfacePoint, Triangle, TriangleShading};
+use light_transport::geometry::{
+    Derivatives, NO_SHADING, Ray, Sphere, SurfacePoint, Triangle, TriangleShading,
+};
 use light_transport::manifold::constraint::constraint;
 use light_transport::manifold::geometry_term::generalized_geometry_reverse;
 use light_transport::manifold::{
@@ -23,9 +25,9 @@ fn r3(rng: &mut ChainRng) -> DVec3 {
     DVec3::new(uniform(rng), uniform(rng), uniform(rng)) * 2.0 - 1.0
 }
 
-/// A random surface point with curvature: on a random sphere (exact geometry) or on a random
-/// triangle with random vertex normals and texture coordinates.
-fn random_point(rng: &mut ChainRng) -> SurfacePoint {
+/// A random surface point with curvature and its derivatives: on a random sphere (exact geometry)
+/// or on a random triangle with random vertex normals and texture coordinates.
+fn random_point(rng: &mut ChainRng) -> (SurfacePoint, Derivatives) {
     if uniform(rng) < 0.5 {
         let s = Sphere {
             center: r3(rng) * 3.0,
@@ -33,7 +35,8 @@ fn random_point(rng: &mut ChainRng) -> SurfacePoint {
             flip: uniform(rng) < 0.3,
         };
         let dir = r3(rng).normalize();
-        s.point(s.center + dir * s.radius, 0)
+        let point = s.point(s.center + dir * s.radius, 0);
+        (point, s.derivatives(point.n))
     } else {
         let base = r3(rng) * 3.0;
         let p = [0, 1, 2].map(|_| base + r3(rng));
@@ -49,7 +52,10 @@ fn random_point(rng: &mut ChainRng) -> SurfacePoint {
             s: None,
         };
         let (b1, b2) = (0.1 + 0.4 * uniform(rng), 0.1 + 0.4 * uniform(rng));
-        t.point_shaded(b1, b2, 0, Some(&sh))
+        (
+            t.point_shaded(b1, b2, 0, Some(&sh)),
+            t.derivatives(b1, b2, Some(&sh)),
+        )
     }
 }
 
@@ -65,8 +71,10 @@ fn random_chain(rng: &mut ChainRng, m: usize, offsets: bool) -> Vec<ChainVertex>
                     eta: 1.1 + uniform(rng),
                 }
             };
+            let (point, derivatives) = random_point(rng);
             ChainVertex {
-                point: random_point(rng),
+                point,
+                derivatives,
                 material: 0,
                 interaction,
                 offset: if offsets {
@@ -228,12 +236,13 @@ fn traced_chain(
     dir: DVec3,
     interaction: Interaction,
 ) -> Vec<ChainVertex> {
-    let start = ChainVertex {
-        point: SurfacePoint::flat(x0, DVec3::Y, u32::MAX),
-        material: NO_MATERIAL,
-        interaction: Interaction::Reflect,
-        offset: [0.0; 2],
-    };
+    let start = ChainVertex::new(
+        scene,
+        SurfacePoint::flat(x0, DVec3::Y, u32::MAX),
+        NO_MATERIAL,
+        Interaction::Reflect,
+        [0.0; 2],
+    );
     trace_chain(scene, &start, dir, &[interaction]).expect("a traced chain")
 }
 
@@ -241,12 +250,13 @@ fn surface_vertex(scene: &Scene, from: DVec3, to: DVec3) -> ChainVertex {
     let hit = scene
         .intersect(&Ray::new(from, (to - from).normalize()))
         .unwrap();
-    ChainVertex {
-        point: hit.point,
-        material: scene.primitive_material[hit.point.primitive as usize],
-        interaction: Interaction::Reflect,
-        offset: [0.0; 2],
-    }
+    ChainVertex::new(
+        scene,
+        hit.point,
+        scene.primitive_material[hit.point.primitive as usize],
+        Interaction::Reflect,
+        [0.0; 2],
+    )
 }
 
 #[test]

@@ -40,12 +40,7 @@ fn chain_vertex(scene: &Scene, path: &FullPath, i: usize, inside: bool) -> Chain
             };
         }
     }
-    ChainVertex {
-        point: v.point,
-        material,
-        interaction,
-        offset: [0.0; 2],
-    }
+    ChainVertex::new(scene, v.point, material, interaction, [0.0; 2])
 }
 
 /// `(moves walked back, moves that did not walk back)` over proposals from fresh paths.

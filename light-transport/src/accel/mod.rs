@@ -3,7 +3,7 @@
 //! cannot lose a hit; primitives are intersected in f64 and the closest f64 hit is kept. Triangles
 //! whose bounding box is mostly empty enter the BVH as several references (`split`).
 
-use crate::geometry::{Hit, Sphere, Triangle, TriangleShading};
+use crate::geometry::{Derivatives, Hit, Sphere, SurfacePoint, Triangle, TriangleShading};
 use crate::math::DVec3;
 use glam::Vec3A;
 mod convert;
@@ -79,6 +79,22 @@ impl Primitive {
                 t,
                 point: s.point(o + d * t, index),
             },
+        }
+    }
+
+    /// The differential geometry of `point`, a point on this primitive (`shading`: as in
+    /// [`Primitive::hit_point`]). A point without a shading normal (sampled on a light) gets the
+    /// derivatives of flat shading, as it was built with.
+    fn derivatives(&self, point: &SurfacePoint, shading: &[TriangleShading]) -> Derivatives {
+        match self {
+            Primitive::Triangle(tri) => {
+                let shading = point
+                    .shaded()
+                    .then(|| shading.get(tri.shading as usize))
+                    .flatten();
+                tri.derivatives(point.bary[0], point.bary[1], shading)
+            }
+            Primitive::Sphere(s) => s.derivatives(point.n),
         }
     }
 
@@ -581,6 +597,17 @@ impl Bvh {
         })
     }
 
+    /// The differential geometry of a point on one of the BVH's primitives, which a hit or a
+    /// light sample gave; zero for points that lie on none (`SurfacePoint::flat`: lens, point
+    /// lights).
+    pub fn derivatives(&self, point: &SurfacePoint) -> Derivatives {
+        self.primitives
+            .get(point.primitive as usize)
+            .map_or_else(Derivatives::default, |p| {
+                p.derivatives(point, &self.shading)
+            })
+    }
+
     /// Whether anything blocks the open segment `o + t d`, `t ∈ (0, t_max)`.
     ///
     /// The primitive that blocked this thread's last segment is tested first, before any
@@ -841,6 +868,65 @@ mod tests {
         };
         assert!(references > prims.len() + 100, "{references} references");
         agrees_on_random_rays(&prims, &bvh, 4000, &mut r, 12.0);
+    }
+
+    /// The derivatives the BVH computes on demand for a hit are its primitive's at the hit's
+    /// barycentrics (a triangle's with its vertex normals from the shading table, a sphere's at
+    /// its normal); a point sampled on the same triangle, without a shading normal, gets flat
+    /// shading's; a point on no primitive gets none.
+    #[test]
+    fn derivatives_on_demand_are_the_primitives() {
+        let mut rng = stream(10, 0);
+        let mut r = || uniform(&mut rng);
+        let tri = Triangle {
+            p: [DVec3::ZERO, DVec3::X, DVec3::Y],
+            uv: [[0.0, 0.0], [2.0, 0.5], [0.3, 1.5]],
+            flip: false,
+            shading: 0,
+        };
+        let normals = TriangleShading {
+            n: [
+                DVec3::new(0.3, 0.1, 1.0).normalize(),
+                DVec3::new(-0.2, 0.2, 1.0).normalize(),
+                DVec3::new(0.1, -0.3, 1.0).normalize(),
+            ],
+            s: None,
+        };
+        let ball = Sphere {
+            center: DVec3::new(0.3, 0.3, -3.0),
+            radius: 0.5,
+            flip: true,
+        };
+        let bvh = Bvh::with_shading(
+            vec![Primitive::Triangle(tri), Primitive::Sphere(ball)],
+            vec![normals],
+        );
+        for _ in 0..50 {
+            let (x, y) = (0.4 * r(), 0.4 * r());
+            let hit = bvh
+                .closest_hit(DVec3::new(x, y, 1.0), -DVec3::Z, f64::INFINITY)
+                .expect("the triangle");
+            let [b1, b2] = hit.point.bary;
+            assert!(hit.point.shaded());
+            let d = bvh.derivatives(&hit.point);
+            assert_eq!(d, tri.derivatives(b1, b2, Some(&normals)));
+            assert_ne!(d.dndu, DVec3::ZERO);
+            let sampled = tri.point(b1, b2, hit.point.primitive);
+            assert_eq!(bvh.derivatives(&sampled), tri.derivatives(b1, b2, None));
+            let below = bvh
+                .closest_hit(
+                    DVec3::new(0.3 + 0.8 * x, 0.3 - 0.8 * y, -1.0),
+                    -DVec3::Z,
+                    f64::INFINITY,
+                )
+                .expect("the sphere");
+            assert_eq!(
+                bvh.derivatives(&below.point),
+                ball.derivatives(below.point.n)
+            );
+        }
+        let lens = SurfacePoint::flat(DVec3::ZERO, DVec3::Z, u32::MAX);
+        assert_eq!(bvh.derivatives(&lens), Derivatives::default());
     }
 
     /// Occlusion with the last occluder tested first agrees with brute force, on bundles of

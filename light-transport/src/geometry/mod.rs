@@ -1,5 +1,5 @@
-//! Rays, primitives and their intersections, in f64, with the differential geometry of every
-//! surface point (what shading normals and manifold walks need).
+//! Rays, primitives and their intersections, in f64: surface points with their shading normals
+//! and texture coordinates, and on demand their differential geometry (what manifold walks need).
 
 mod ray;
 mod sphere;
@@ -11,13 +11,13 @@ pub use triangle::{NO_SHADING, Triangle, TriangleShading};
 
 use crate::math::DVec3;
 
-/// A point on a surface found by a ray or by sampling, with its differential geometry.
+/// A point on a surface found by a ray or by sampling.
 ///
 /// The surface is parameterised by `(u, v)` (a triangle's texture coordinates when it has them,
 /// else the default `(0,0), (1,0), (1,1)` at its vertices, as pbrt; a sphere's `(φ/2π, θ/π)`).
-/// `dpdu`, `dpdv` are the derivatives of the position and `dndu`, `dndv` those of the *unit*
-/// shading normal — for a triangle with vertex normals, of the normalised interpolated normal
-/// (zero for flat shading).
+/// The derivatives of that parameterisation ([`Derivatives`]) are not carried: only manifold walks
+/// read them, and they cost a hit more than the rest of its point (divisions, and trigonometry on
+/// spheres). `Bvh::derivatives` computes them from the point's primitive and barycentrics.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
     /// Position.
@@ -31,8 +31,22 @@ pub struct SurfacePoint {
     /// Texture coordinates.
     pub uv: [f64; 2],
     /// Shading tangent for anisotropic BSDFs: the interpolated vertex tangent (pbrt `"S"`) where
-    /// given, else `dpdu`.
+    /// given, else the direction of `∂p/∂u`.
     pub tangent: DVec3,
+    /// Barycentrics `(b1, b2)` on a triangle (zero on other surfaces), from which its
+    /// [`Derivatives`] are computed.
+    pub bary: [f64; 2],
+    /// Index of the primitive in the scene.
+    pub primitive: u32,
+}
+
+/// The differential geometry of a surface point: `dpdu`, `dpdv` the derivatives of the position
+/// and `dndu`, `dndv` those of the *unit* shading normal — for a triangle with vertex normals, of
+/// the normalised interpolated normal (zero for flat shading, and at points sampled on a light,
+/// which have no shading normal). All zero for points off the scene's surfaces (lens, point
+/// lights).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Derivatives {
     /// `∂p/∂u`.
     pub dpdu: DVec3,
     /// `∂p/∂v`.
@@ -41,8 +55,6 @@ pub struct SurfacePoint {
     pub dndu: DVec3,
     /// `∂n_s/∂v`.
     pub dndv: DVec3,
-    /// Index of the primitive in the scene.
-    pub primitive: u32,
 }
 
 impl SurfacePoint {
@@ -55,10 +67,7 @@ impl SurfacePoint {
             ns: n,
             uv: [0.0; 2],
             tangent: crate::math::Frame::from_normal(n).s,
-            dpdu: DVec3::ZERO,
-            dpdv: DVec3::ZERO,
-            dndu: DVec3::ZERO,
-            dndv: DVec3::ZERO,
+            bary: [0.0; 2],
             primitive,
         }
     }

@@ -1,7 +1,7 @@
 //! Spheres: intersection in f64, uniform area sampling (`z = 1 − 2 u0`, `φ = 2π u1`) and its
 //! inverse.
 
-use super::SurfacePoint;
+use super::{Derivatives, SurfacePoint};
 use crate::math::DVec3;
 use std::f64::consts::PI;
 
@@ -50,21 +50,16 @@ impl Sphere {
         }
     }
 
-    /// The surface point at world position `p` (projected onto the sphere), with the exact
-    /// differential geometry of the parameterisation `u = φ/2π`, `v = θ/π` (`θ` from `+z`):
-    /// `∂p/∂u = 2π (−y, x, 0)`, `∂p/∂v = π (z cos φ, z sin φ, −r sin θ)` relative to the centre,
-    /// and `∂n/∂u = ±∂p/∂u / r`, `∂n/∂v = ±∂p/∂v / r` (the normal is the scaled position).
+    /// The surface point at world position `p` (projected onto the sphere), parameterised by
+    /// `u = φ/2π`, `v = θ/π` (`θ` from `+z`); its tangent is along `∂p/∂u = 2π (−y, x, 0)`
+    /// (relative to the centre). Its derivatives: [`Sphere::derivatives`].
     pub fn point(&self, p: DVec3, primitive: u32) -> SurfacePoint {
         let (p, n) = self.project(p);
         let phi = crate::math::phi(n);
         let cos_theta = n.z.clamp(-1.0, 1.0);
         let uv = [phi / (2.0 * PI), cos_theta.acos() / PI];
-        let q = n * self.radius;
-        let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-        let dpdu = DVec3::new(-q.y, q.x, 0.0) * (2.0 * PI);
-        let dpdv = DVec3::new(q.z * phi.cos(), q.z * phi.sin(), -self.radius * sin_theta) * PI;
-        let sign = if self.flip { -1.0 } else { 1.0 };
-        let n = n * sign;
+        let dpdu = Self::dpdu(n * self.radius);
+        let n = n * self.sign();
         SurfacePoint {
             p,
             n,
@@ -73,12 +68,41 @@ impl Sphere {
             tangent: dpdu
                 .try_normalize()
                 .unwrap_or_else(|| crate::math::Frame::from_normal(n).s),
+            bary: [0.0; 2],
+            primitive,
+        }
+    }
+
+    /// The exact differential geometry of [`Sphere::point`]'s point with (oriented) normal `n`:
+    /// `∂p/∂u = 2π (−y, x, 0)`, `∂p/∂v = π (z cos φ, z sin φ, −r sin θ)` relative to the centre,
+    /// and `∂n/∂u = ±∂p/∂u / r`, `∂n/∂v = ±∂p/∂v / r` (the normal is the scaled position).
+    pub fn derivatives(&self, n: DVec3) -> Derivatives {
+        let sign = self.sign();
+        let n = n * sign;
+        let phi = crate::math::phi(n);
+        let cos_theta = n.z.clamp(-1.0, 1.0);
+        let q = n * self.radius;
+        let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+        let dpdu = Self::dpdu(q);
+        let dpdv = DVec3::new(q.z * phi.cos(), q.z * phi.sin(), -self.radius * sin_theta) * PI;
+        Derivatives {
             dpdu,
             dpdv,
             dndu: dpdu * (sign / self.radius),
             dndv: dpdv * (sign / self.radius),
-            primitive,
         }
+    }
+
+    /// `∂p/∂u` at the point `q` relative to the centre.
+    #[inline]
+    fn dpdu(q: DVec3) -> DVec3 {
+        DVec3::new(-q.y, q.x, 0.0) * (2.0 * PI)
+    }
+
+    /// 1, or −1 where normals point inwards.
+    #[inline]
+    fn sign(&self) -> f64 {
+        if self.flip { -1.0 } else { 1.0 }
     }
 
     /// `p` moved onto the sphere along its outward normal, and that normal (unflipped).
@@ -97,8 +121,7 @@ impl Sphere {
     /// (its texture coordinates and derivatives take trigonometry).
     pub fn sample_position(&self, u: [f64; 2]) -> (DVec3, DVec3) {
         let (p, n) = self.project(self.sample_raw(u));
-        let sign = if self.flip { -1.0 } else { 1.0 };
-        (p, n * sign)
+        (p, n * self.sign())
     }
 
     /// The point uniform area sampling maps `u` to, before [`Sphere::point`] projects it.

@@ -5,7 +5,7 @@
 //! derivatives of position and of the *normalised* shading normal,
 //! `∂n_s/∂u = (∂N/∂u − n_s (n_s · ∂N/∂u)) / |N|`.
 
-use super::SurfacePoint;
+use super::{Derivatives, SurfacePoint};
 use crate::math::DVec3;
 
 /// `Triangle::shading` of a triangle without vertex normals.
@@ -93,7 +93,8 @@ impl Triangle {
         )
     }
 
-    /// The surface point at barycentrics `(b1, b2)` with the triangle's shading data.
+    /// The surface point at barycentrics `(b1, b2)` with the triangle's shading data (without its
+    /// [`Derivatives`]: [`Triangle::derivatives`]).
     pub fn point_shaded(
         &self,
         b1: f64,
@@ -103,54 +104,27 @@ impl Triangle {
     ) -> SurfacePoint {
         let (p, n) = self.position(b1, b2);
         let b0 = 1.0 - b1 - b2;
-        let t = self.uv.map(|[u, v]| [f64::from(u), f64::from(v)]);
+        let t = self.uv_f64();
         let uv = [
             t[0][0] * b0 + t[1][0] * b1 + t[2][0] * b2,
             t[0][1] * b0 + t[1][1] * b1 + t[2][1] * b2,
         ];
         let (e1, e2) = (self.p[1] - self.p[0], self.p[2] - self.p[0]);
-        // d(b1, b2)/d(u, v): the inverse of the uv edge matrix (barycentrics themselves where the
-        // texture coordinates are degenerate).
-        let (du1, dv1) = (t[1][0] - t[0][0], t[1][1] - t[0][1]);
-        let (du2, dv2) = (t[2][0] - t[0][0], t[2][1] - t[0][1]);
-        let det = du1 * dv2 - dv1 * du2;
-        let by_uv = |a: DVec3, b: DVec3| -> (DVec3, DVec3) {
-            if det.abs() > 1e-12 * (du1.abs() + dv1.abs()) * (du2.abs() + dv2.abs()) && det != 0.0 {
-                ((a * dv2 - b * dv1) / det, (b * du1 - a * du2) / det)
-            } else {
-                (a, b)
-            }
-        };
-        let (dpdu, dpdv) = by_uv(e1, e2);
+        let dpdu = UvInverse::of(t).first(e1, e2);
         let mut point = SurfacePoint {
             p,
             n,
             ns: n,
             uv,
             tangent: dpdu.try_normalize().unwrap_or_else(|| e1.normalize()),
-            dpdu,
-            dpdv,
-            dndu: DVec3::ZERO,
-            dndv: DVec3::ZERO,
+            bary: [b1, b2],
             primitive,
         };
-        let Some(sh) = shading else {
+        let Some((sh, ns, _, sign)) = shading.and_then(|sh| Self::shading_normal(sh, b1, b2, n))
+        else {
             return point;
         };
-        let big_n = sh.n[0] * b0 + sh.n[1] * b1 + sh.n[2] * b2;
-        let len = big_n.length();
-        if !(len > 1e-12 && len.is_finite()) {
-            return point;
-        }
-        let ns = big_n / len;
-        // The shading normal stays on the geometric normal's side (which decides emission and the
-        // sides of dielectrics); meshes are wound so that this holds but at extreme normals.
-        let sign = if ns.dot(n) < 0.0 { -1.0 } else { 1.0 };
-        let (dnu, dnv) = by_uv(sh.n[1] - sh.n[0], sh.n[2] - sh.n[0]);
-        let unit = |d: DVec3| (d - ns * ns.dot(d)) / len;
         point.ns = ns * sign;
-        point.dndu = unit(dnu) * sign;
-        point.dndv = unit(dnv) * sign;
         if let Some(t) = sh.s {
             let s = t[0] * b0 + t[1] * b1 + t[2] * b2;
             if let Some(s) = s.try_normalize() {
@@ -158,6 +132,57 @@ impl Triangle {
             }
         }
         point
+    }
+
+    /// The differential geometry of the point [`Triangle::point_shaded`] gives at `(b1, b2)` with
+    /// the same `shading`.
+    pub fn derivatives(&self, b1: f64, b2: f64, shading: Option<&TriangleShading>) -> Derivatives {
+        let inverse = UvInverse::of(self.uv_f64());
+        let (e1, e2) = (self.p[1] - self.p[0], self.p[2] - self.p[0]);
+        let (dpdu, dpdv) = inverse.apply(e1, e2);
+        let mut d = Derivatives {
+            dpdu,
+            dpdv,
+            ..Derivatives::default()
+        };
+        let Some((sh, ns, len, sign)) =
+            shading.and_then(|sh| Self::shading_normal(sh, b1, b2, self.normal()))
+        else {
+            return d;
+        };
+        let (dnu, dnv) = inverse.apply(sh.n[1] - sh.n[0], sh.n[2] - sh.n[0]);
+        let unit = |d: DVec3| (d - ns * ns.dot(d)) / len;
+        d.dndu = unit(dnu) * sign;
+        d.dndv = unit(dnv) * sign;
+        d
+    }
+
+    /// The interpolated vertex normal at `(b1, b2)`: `shading`, the unit normal `N/|N|`, `|N|`,
+    /// and the sign that puts it on the side of the geometric normal `n` (meshes are wound so that
+    /// it is 1 but at extreme normals; the geometric side decides emission and the sides of
+    /// dielectrics). `None` where `N` vanishes.
+    #[inline]
+    fn shading_normal(
+        sh: &TriangleShading,
+        b1: f64,
+        b2: f64,
+        n: DVec3,
+    ) -> Option<(&TriangleShading, DVec3, f64, f64)> {
+        let b0 = 1.0 - b1 - b2;
+        let big_n = sh.n[0] * b0 + sh.n[1] * b1 + sh.n[2] * b2;
+        let len = big_n.length();
+        if !(len > 1e-12 && len.is_finite()) {
+            return None;
+        }
+        let ns = big_n / len;
+        let sign = if ns.dot(n) < 0.0 { -1.0 } else { 1.0 };
+        Some((sh, ns, len, sign))
+    }
+
+    /// Texture coordinates per vertex, in f64.
+    #[inline]
+    fn uv_f64(&self) -> [[f64; 2]; 3] {
+        self.uv.map(|[u, v]| [f64::from(u), f64::from(v)])
     }
 
     /// Uniform area sampling: barycentrics from two numbers (the square-root warp
@@ -197,6 +222,64 @@ impl Triangle {
         let b1 = (d22 * dv1 - d12 * dv2) / det;
         let b2 = (d11 * dv2 - d12 * dv1) / det;
         (b1, b2)
+    }
+}
+
+/// `∂(b1, b2)/∂(u, v)`, the inverse of a triangle's matrix of texture-coordinate edges, applied to
+/// a pair of edge vectors `(a, b)` (`∂/∂b1`, `∂/∂b2` of a linear function) to give its
+/// derivatives along `u` and `v`. Where the texture coordinates are degenerate the barycentrics
+/// themselves are the parameterisation, and the pair comes back as it is.
+struct UvInverse {
+    du1: f64,
+    dv1: f64,
+    du2: f64,
+    dv2: f64,
+    det: f64,
+}
+
+impl UvInverse {
+    #[inline]
+    fn of(t: [[f64; 2]; 3]) -> Self {
+        let (du1, dv1) = (t[1][0] - t[0][0], t[1][1] - t[0][1]);
+        let (du2, dv2) = (t[2][0] - t[0][0], t[2][1] - t[0][1]);
+        let det = du1 * dv2 - dv1 * du2;
+        Self {
+            du1,
+            dv1,
+            du2,
+            dv2,
+            det,
+        }
+    }
+
+    #[inline]
+    fn invertible(&self) -> bool {
+        self.det.abs()
+            > 1e-12 * (self.du1.abs() + self.dv1.abs()) * (self.du2.abs() + self.dv2.abs())
+            && self.det != 0.0
+    }
+
+    /// The derivative along `u` alone.
+    #[inline]
+    fn first(&self, a: DVec3, b: DVec3) -> DVec3 {
+        if self.invertible() {
+            (a * self.dv2 - b * self.dv1) / self.det
+        } else {
+            a
+        }
+    }
+
+    /// The derivatives along `u` and `v`.
+    #[inline]
+    fn apply(&self, a: DVec3, b: DVec3) -> (DVec3, DVec3) {
+        if self.invertible() {
+            (
+                (a * self.dv2 - b * self.dv1) / self.det,
+                (b * self.du1 - a * self.du2) / self.det,
+            )
+        } else {
+            (a, b)
+        }
     }
 }
 

@@ -5,8 +5,9 @@
 //! eq. 9). Moving a vertex by `a e₁ + b e₂` moves its shading normal by `a ∂n_s/∂e₁ + b ∂n_s/∂e₂`,
 //! obtained from the surface's `∂n_s/∂u, ∂n_s/∂v` through its `∂p/∂u, ∂p/∂v`.
 
-use crate::geometry::SurfacePoint;
+use crate::geometry::{Derivatives, SurfacePoint};
 use crate::math::{DVec3, Frame};
+use crate::scene::Scene;
 
 /// The fixed direction whose projection onto the shading tangent plane is the first axis of
 /// every chain vertex's shading basis ([`ChainVertex::shading_basis`]); unit, chosen off the
@@ -36,8 +37,11 @@ pub enum Interaction {
 /// vertices, eq. 11).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ChainVertex {
-    /// Position and differential geometry.
+    /// Position and normals.
     pub point: SurfacePoint,
+    /// The point's differential geometry ([`ChainVertex::new`] computes it; a vertex built by
+    /// hand must bring its own, and a vertex whose point moves needs the new point's).
+    pub derivatives: Derivatives,
     /// Material index (`u32::MAX` for endpoints that are not on a scene surface).
     pub material: u32,
     /// Reflection or refraction (ignored at the chain's endpoints).
@@ -47,6 +51,24 @@ pub struct ChainVertex {
 }
 
 impl ChainVertex {
+    /// The vertex at `point`, a point of `scene` (or off its surfaces: lens, point lights), with
+    /// its differential geometry.
+    pub fn new(
+        scene: &Scene,
+        point: SurfacePoint,
+        material: u32,
+        interaction: Interaction,
+        offset: [f64; 2],
+    ) -> Self {
+        Self {
+            derivatives: scene.bvh.derivatives(&point),
+            point,
+            material,
+            interaction,
+            offset,
+        }
+    }
+
     /// Position.
     #[inline]
     pub fn p(&self) -> DVec3 {
@@ -56,7 +78,7 @@ impl ChainVertex {
     /// An orthonormal basis `(e₁, e₂)` of the geometric tangent plane (along `∂p/∂u` where there
     /// is one).
     pub fn tangent_basis(&self) -> (DVec3, DVec3) {
-        let f = Frame::from_normal_tangent(self.point.n, self.point.dpdu);
+        let f = Frame::from_normal_tangent(self.point.n, self.derivatives.dpdu);
         (f.s, f.t)
     }
 
@@ -64,7 +86,7 @@ impl ChainVertex {
     /// `e` is written as `du ∂p/∂u + dv ∂p/∂v` (least squares; exact for tangent directions) and
     /// the normal's derivative is `du ∂n_s/∂u + dv ∂n_s/∂v`. Zero without a parameterisation.
     pub fn normal_derivatives(&self, e1: DVec3, e2: DVec3) -> (DVec3, DVec3) {
-        let pt = &self.point;
+        let pt = &self.derivatives;
         let (a, b, c) = (
             pt.dpdu.dot(pt.dpdu),
             pt.dpdu.dot(pt.dpdv),

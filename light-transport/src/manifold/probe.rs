@@ -54,12 +54,13 @@ pub fn probe_cases(
         else {
             continue;
         };
-        let start = ChainVertex {
+        let start = ChainVertex::new(
+            scene,
             point,
-            material: scene.primitive_material[primitive as usize],
-            interaction: Interaction::Reflect,
-            offset: [0.0; 2],
-        };
+            scene.primitive_material[primitive as usize],
+            Interaction::Reflect,
+            [0.0; 2],
+        );
         let mut chain = vec![start];
         let mut origin = offset_origin(point.p, point.n, dir);
         let end = loop {
@@ -70,12 +71,8 @@ pub fn probe_cases(
             let Ok(bsdf) = scene.bsdf(&hit.point) else {
                 break None;
             };
-            let mut v = ChainVertex {
-                point: hit.point,
-                material,
-                interaction: Interaction::Reflect,
-                offset: [0.0; 2],
-            };
+            let mut v =
+                ChainVertex::new(scene, hit.point, material, Interaction::Reflect, [0.0; 2]);
             if !bsdf.is_delta_only() {
                 break Some(v);
             }
@@ -121,10 +118,7 @@ pub fn probe_cases(
         }
         out.push(ProbeCase {
             chain,
-            target: ChainVertex {
-                point: hit.point,
-                ..end
-            },
+            target: ChainVertex::new(scene, hit.point, end.material, end.interaction, end.offset),
         });
     }
     out

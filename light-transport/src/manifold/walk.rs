@@ -212,12 +212,7 @@ fn follow(
         if want.is_some_and(|m| m != material) {
             return Err(WalkFailure::ChangedConfiguration);
         }
-        let v = ChainVertex {
-            point: hit.point,
-            material,
-            interaction,
-            offset,
-        };
+        let v = ChainVertex::new(scene, hit.point, material, interaction, offset);
         let wi = -dir;
         let h = v.half_vector(wi).ok_or(WalkFailure::ChangedConfiguration)?;
         let eta = v.relative_eta(wi);
@@ -277,12 +272,13 @@ pub fn trace_chain(
     let hit = scene
         .intersect(&Ray::new(origin, dir))
         .ok_or(WalkFailure::ChangedConfiguration)?;
-    out.push(ChainVertex {
-        point: hit.point,
-        material: scene.primitive_material[hit.point.primitive as usize],
-        interaction: Interaction::Reflect,
-        offset: [0.0; 2],
-    });
+    out.push(ChainVertex::new(
+        scene,
+        hit.point,
+        scene.primitive_material[hit.point.primitive as usize],
+        Interaction::Reflect,
+        [0.0; 2],
+    ));
     Ok(out)
 }
 

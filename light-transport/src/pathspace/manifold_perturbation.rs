@@ -404,11 +404,13 @@ impl<'a> ManifoldPerturbation<'a> {
         i: usize,
     ) -> Result<DVec3, Failure> {
         let want = chain_vertex(self.scene, x, i, true).ok_or(Failure::Failed)?;
-        let here = ChainVertex {
-            point: v.point,
-            material: self.scene.primitive_material[v.point.primitive as usize],
-            ..want
-        };
+        let here = ChainVertex::new(
+            self.scene,
+            v.point,
+            self.scene.primitive_material[v.point.primitive as usize],
+            want.interaction,
+            want.offset,
+        );
         if here.material != want.material {
             return Err(Failure::Failed);
         }
@@ -684,12 +686,7 @@ impl<'a> ManifoldPerturbation<'a> {
         } else {
             scene.primitive_material[target.primitive as usize]
         };
-        let target = ChainVertex {
-            point: *target,
-            material,
-            interaction: Interaction::Reflect,
-            offset: [0.0; 2],
-        };
+        let target = ChainVertex::new(scene, *target, material, Interaction::Reflect, [0.0; 2]);
         let walked = match self.stats.lock() {
             Ok(mut stats) if self.settings.defect == Some(ManifoldDefect::SkipReverseWalk) => {
                 let forward = walk_manifold(scene, &chain, &target, &self.settings.walk);
@@ -904,12 +901,7 @@ fn chain_vertex(
         },
         VertexKind::Surface => scene.primitive_material[v.point.primitive as usize],
     };
-    let mut cv = ChainVertex {
-        point: v.point,
-        material,
-        interaction: Interaction::Reflect,
-        offset: [0.0; 2],
-    };
+    let mut cv = ChainVertex::new(scene, v.point, material, Interaction::Reflect, [0.0; 2]);
     if !specular {
         return Some(cv);
     }
