@@ -143,7 +143,10 @@ fn the_analytic_sphere_matches_a_fine_mesh_sphere() {
         let mesh = hit.point;
         let exact = sphere.point(mesh.p, 0);
         // The mesh's derivatives as manifold walks get them: computed on demand from the hit.
-        let (dm, de) = (scene.bvh.derivatives(&mesh), sphere.derivatives(exact.n));
+        let (dm, de) = (
+            scene.bvh.derivatives(&mesh),
+            sphere.derivatives(exact.n, exact.local[0]),
+        );
         let e = [
             rel(mesh.ns, exact.ns),
             rel(dm.dpdu, de.dpdu),

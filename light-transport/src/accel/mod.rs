@@ -92,9 +92,9 @@ impl Primitive {
                     .shaded()
                     .then(|| shading.get(tri.shading as usize))
                     .flatten();
-                tri.derivatives(point.bary[0], point.bary[1], shading)
+                tri.derivatives(point.local[0], point.local[1], shading)
             }
-            Primitive::Sphere(s) => s.derivatives(point.n),
+            Primitive::Sphere(s) => s.derivatives(point.n, point.local[0]),
         }
     }
 
@@ -906,7 +906,7 @@ mod tests {
             let hit = bvh
                 .closest_hit(DVec3::new(x, y, 1.0), -DVec3::Z, f64::INFINITY)
                 .expect("the triangle");
-            let [b1, b2] = hit.point.bary;
+            let [b1, b2] = hit.point.local;
             assert!(hit.point.shaded());
             let d = bvh.derivatives(&hit.point);
             assert_eq!(d, tri.derivatives(b1, b2, Some(&normals)));
@@ -922,7 +922,7 @@ mod tests {
                 .expect("the sphere");
             assert_eq!(
                 bvh.derivatives(&below.point),
-                ball.derivatives(below.point.n)
+                ball.derivatives(below.point.n, below.point.local[0])
             );
         }
         let lens = SurfacePoint::flat(DVec3::ZERO, DVec3::Z, u32::MAX);

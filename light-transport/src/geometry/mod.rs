@@ -17,7 +17,7 @@ use crate::math::DVec3;
 /// else the default `(0,0), (1,0), (1,1)` at its vertices, as pbrt; a sphere's `(φ/2π, θ/π)`).
 /// The derivatives of that parameterisation ([`Derivatives`]) are not carried: only manifold walks
 /// read them, and they cost a hit more than the rest of its point (divisions, and trigonometry on
-/// spheres). `Bvh::derivatives` computes them from the point's primitive and barycentrics.
+/// spheres). `Bvh::derivatives` computes them from the point's primitive and `local` coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
     /// Position.
@@ -33,9 +33,9 @@ pub struct SurfacePoint {
     /// Shading tangent for anisotropic BSDFs: the interpolated vertex tangent (pbrt `"S"`) where
     /// given, else the direction of `∂p/∂u`.
     pub tangent: DVec3,
-    /// Barycentrics `(b1, b2)` on a triangle (zero on other surfaces), from which its
-    /// [`Derivatives`] are computed.
-    pub bary: [f64; 2],
+    /// The point's coordinates on its primitive, from which its [`Derivatives`] are computed: a
+    /// triangle's barycentrics `(b1, b2)`, a sphere's `(φ, 0)` (zero off the scene's surfaces).
+    pub local: [f64; 2],
     /// Index of the primitive in the scene.
     pub primitive: u32,
 }
@@ -67,7 +67,7 @@ impl SurfacePoint {
             ns: n,
             uv: [0.0; 2],
             tangent: crate::math::Frame::from_normal(n).s,
-            bary: [0.0; 2],
+            local: [0.0; 2],
             primitive,
         }
     }

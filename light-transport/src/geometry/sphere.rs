@@ -68,18 +68,18 @@ impl Sphere {
             tangent: dpdu
                 .try_normalize()
                 .unwrap_or_else(|| crate::math::Frame::from_normal(n).s),
-            bary: [0.0; 2],
+            local: [phi, 0.0],
             primitive,
         }
     }
 
-    /// The exact differential geometry of [`Sphere::point`]'s point with (oriented) normal `n`:
-    /// `∂p/∂u = 2π (−y, x, 0)`, `∂p/∂v = π (z cos φ, z sin φ, −r sin θ)` relative to the centre,
-    /// and `∂n/∂u = ±∂p/∂u / r`, `∂n/∂v = ±∂p/∂v / r` (the normal is the scaled position).
-    pub fn derivatives(&self, n: DVec3) -> Derivatives {
+    /// The exact differential geometry of [`Sphere::point`]'s point with (oriented) normal `n` and
+    /// azimuth `phi` (its `local[0]`): `∂p/∂u = 2π (−y, x, 0)`,
+    /// `∂p/∂v = π (z cos φ, z sin φ, −r sin θ)` relative to the centre, and `∂n/∂u = ±∂p/∂u / r`,
+    /// `∂n/∂v = ±∂p/∂v / r` (the normal is the scaled position).
+    pub fn derivatives(&self, n: DVec3, phi: f64) -> Derivatives {
         let sign = self.sign();
         let n = n * sign;
-        let phi = crate::math::phi(n);
         let cos_theta = n.z.clamp(-1.0, 1.0);
         let q = n * self.radius;
         let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();

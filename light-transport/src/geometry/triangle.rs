@@ -117,7 +117,7 @@ impl Triangle {
             ns: n,
             uv,
             tangent: dpdu.try_normalize().unwrap_or_else(|| e1.normalize()),
-            bary: [b1, b2],
+            local: [b1, b2],
             primitive,
         };
         let Some((sh, ns, _, sign)) = shading.and_then(|sh| Self::shading_normal(sh, b1, b2, n))
