@@ -83,17 +83,17 @@ impl Primitive {
     }
 
     /// The differential geometry of `point`, a point on this primitive (`shading`: as in
-    /// [`Primitive::hit_point`]). A point without a shading normal (sampled on a light) gets the
-    /// derivatives of flat shading, as it was built with.
+    /// [`Primitive::hit_point`]). A triangle's always come from its shading table, as a hit's
+    /// point does, even where the interpolated normal happens to equal the geometric one (`∂n/∂u`
+    /// need not vanish there). A point sampled on a light carries the geometric normal but gets
+    /// the same derivatives; manifold chains read `∂n/∂u` only at their interior vertices.
     fn derivatives(&self, point: &SurfacePoint, shading: &[TriangleShading]) -> Derivatives {
         match self {
-            Primitive::Triangle(tri) => {
-                let shading = point
-                    .shaded()
-                    .then(|| shading.get(tri.shading as usize))
-                    .flatten();
-                tri.derivatives(point.local[0], point.local[1], shading)
-            }
+            Primitive::Triangle(tri) => tri.derivatives(
+                point.local[0],
+                point.local[1],
+                shading.get(tri.shading as usize),
+            ),
             Primitive::Sphere(s) => s.derivatives(point.n, point.local[0]),
         }
     }
@@ -872,8 +872,9 @@ mod tests {
 
     /// The derivatives the BVH computes on demand for a hit are its primitive's at the hit's
     /// barycentrics (a triangle's with its vertex normals from the shading table, a sphere's at
-    /// its normal); a point sampled on the same triangle, without a shading normal, gets flat
-    /// shading's; a point on no primitive gets none.
+    /// its normal); a point sampled on the same triangle gets the same; a point on no primitive
+    /// gets none. A hit where the interpolated normal equals the geometric one still gets the
+    /// shading field's `∂n/∂u`.
     #[test]
     fn derivatives_on_demand_are_the_primitives() {
         let mut rng = stream(10, 0);
@@ -912,7 +913,8 @@ mod tests {
             assert_eq!(d, tri.derivatives(b1, b2, Some(&normals)));
             assert_ne!(d.dndu, DVec3::ZERO);
             let sampled = tri.point(b1, b2, hit.point.primitive);
-            assert_eq!(bvh.derivatives(&sampled), tri.derivatives(b1, b2, None));
+            assert!(!sampled.shaded());
+            assert_eq!(bvh.derivatives(&sampled), d);
             let below = bvh
                 .closest_hit(
                     DVec3::new(0.3 + 0.8 * x, 0.3 - 0.8 * y, -1.0),
@@ -927,6 +929,23 @@ mod tests {
         }
         let lens = SurfacePoint::flat(DVec3::ZERO, DVec3::Z, u32::MAX);
         assert_eq!(bvh.derivatives(&lens), Derivatives::default());
+
+        // Vertex normals tilted ±x at the first two corners interpolate to exactly the geometric
+        // normal wherever b0 = b1: the point reads as unshaded, yet its normal turns along u.
+        let tilted = TriangleShading {
+            n: [
+                DVec3::new(0.3, 0.0, 1.0).normalize(),
+                DVec3::new(-0.3, 0.0, 1.0).normalize(),
+                DVec3::Z,
+            ],
+            s: None,
+        };
+        let bvh = Bvh::with_shading(vec![Primitive::Triangle(tri)], vec![tilted]);
+        let level = tri.point_shaded(0.25, 0.5, 0, Some(&tilted));
+        assert!(!level.shaded());
+        let d = bvh.derivatives(&level);
+        assert_eq!(d, tri.derivatives(0.25, 0.5, Some(&tilted)));
+        assert!(d.dndu.x.abs() > 0.1, "{:?}", d.dndu);
     }
 
     /// Occlusion with the last occluder tested first agrees with brute force, on bundles of

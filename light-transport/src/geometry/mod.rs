@@ -42,9 +42,9 @@ pub struct SurfacePoint {
 
 /// The differential geometry of a surface point: `dpdu`, `dpdv` the derivatives of the position
 /// and `dndu`, `dndv` those of the *unit* shading normal — for a triangle with vertex normals, of
-/// the normalised interpolated normal (zero for flat shading, and at points sampled on a light,
-/// which have no shading normal). All zero for points off the scene's surfaces (lens, point
-/// lights).
+/// the normalised interpolated normal (zero for flat shading; a point sampled on a light gets
+/// its triangle's, though it carries the geometric normal). All zero for points off the scene's
+/// surfaces (lens, point lights).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Derivatives {
     /// `∂p/∂u`.
