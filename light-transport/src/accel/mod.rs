@@ -3,7 +3,9 @@
 //! cannot lose a hit; primitives are intersected in f64 and the closest f64 hit is kept. Triangles
 //! whose bounding box is mostly empty enter the BVH as several references (`split`).
 
-use crate::geometry::{Derivatives, Hit, Sphere, SurfacePoint, Triangle, TriangleShading};
+use crate::geometry::{
+    Derivatives, Hit, Sphere, SurfacePoint, Triangle, TriangleFrame, TriangleShading,
+};
 use crate::math::DVec3;
 use glam::Vec3A;
 mod convert;
@@ -60,7 +62,8 @@ impl Primitive {
     }
 
     /// The surface point of a hit found by [`Primitive::intersect_t`] (`shading`: the scene's
-    /// table of triangle shading data).
+    /// table of triangle shading data; `frame`: a triangle's [`Triangle::frame`], computed here
+    /// when not given).
     #[inline]
     fn hit_point(
         &self,
@@ -69,11 +72,18 @@ impl Primitive {
         (t, b1, b2): (f64, f64, f64),
         index: u32,
         shading: &[TriangleShading],
+        frame: Option<&TriangleFrame>,
     ) -> Hit {
         match self {
             Primitive::Triangle(tri) => Hit {
                 t,
-                point: tri.point_shaded(b1, b2, index, shading.get(tri.shading as usize)),
+                point: tri.point_framed(
+                    b1,
+                    b2,
+                    index,
+                    shading.get(tri.shading as usize),
+                    &frame.copied().unwrap_or_else(|| tri.frame()),
+                ),
             },
             Primitive::Sphere(s) => Hit {
                 t,
@@ -101,7 +111,7 @@ impl Primitive {
     #[cfg(test)]
     fn intersect(&self, o: DVec3, d: DVec3, t_max: f64, index: u32) -> Option<Hit> {
         self.intersect_t(o, d, t_max)
-            .map(|h| self.hit_point(o, d, h, index, &[]))
+            .map(|h| self.hit_point(o, d, h, index, &[], None))
     }
 
     #[inline]
@@ -204,7 +214,14 @@ thread_local! {
     /// The primitive that blocked this thread's last occlusion query that traversal answered
     /// (see [`Bvh::occluded`]).
     static LAST_OCCLUDER: std::cell::Cell<u32> = const { std::cell::Cell::new(u32::MAX) };
+    /// Frames of the triangles this thread hit last (see [`Bvh::frame`]); a key of `u64::MAX` is
+    /// an empty slot (no BVH has the id `u32::MAX` and a primitive of that index).
+    static FRAMES: std::cell::RefCell<[(u64, TriangleFrame); FRAME_SLOTS]> =
+        const { std::cell::RefCell::new([(u64::MAX, TriangleFrame::ZERO); FRAME_SLOTS]) };
 }
+
+/// Slots of the per-thread cache of triangle frames.
+const FRAME_SLOTS: usize = 256;
 
 /// Rays traced by this thread since the last call (closest-hit and occlusion queries).
 pub fn take_ray_count() -> u64 {
@@ -228,6 +245,9 @@ pub struct Bvh {
     /// Shading data of the triangles that have vertex normals ([`Triangle::shading`] indexes
     /// it).
     pub shading: Vec<TriangleShading>,
+    /// This BVH's key in the per-thread cache of triangle frames ([`Bvh::frame`]): unique per
+    /// BVH built in the process.
+    id: u32,
     /// Which primitives each leaf reference stands for.
     leaves: Leaves,
 }
@@ -476,11 +496,13 @@ impl Bvh {
                 index,
             }
         };
+        static NEXT_ID: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
         Self {
             bvh,
             primitives,
             original,
             shading,
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             leaves,
         }
     }
@@ -593,7 +615,31 @@ impl Bvh {
             }
         );
         best.map(|(h, index)| {
-            self.primitives[index as usize].hit_point(o, d, h, index, &self.shading)
+            let primitive = &self.primitives[index as usize];
+            let frame = match primitive {
+                Primitive::Triangle(tri) => Some(self.frame(tri, index)),
+                Primitive::Sphere(_) => None,
+            };
+            primitive.hit_point(o, d, h, index, &self.shading, frame.as_ref())
+        })
+    }
+
+    /// [`Triangle::frame`] of `tri`, primitive `index`, from this thread's cache of recently hit
+    /// triangles' frames (direct-mapped on the index, keyed by BVH and index), computed and kept
+    /// there on a miss. Hits come back to the same triangles often (a Metropolis chain's
+    /// perturbations most of all), and a frame costs a division and two square roots; keeping one
+    /// per triangle instead would add 48 bytes to each (the 1M-triangle terrain's peak 200 →
+    /// 245 MB). Exact either way: a frame is a function of its triangle alone.
+    #[inline]
+    fn frame(&self, tri: &Triangle, index: u32) -> TriangleFrame {
+        let key = (u64::from(self.id) << 32) | u64::from(index);
+        FRAMES.with(|cache| {
+            let mut cache = cache.borrow_mut();
+            let slot = &mut cache[index as usize % FRAME_SLOTS];
+            if slot.0 != key {
+                *slot = (key, tri.frame());
+            }
+            slot.1
         })
     }
 
@@ -946,6 +992,49 @@ mod tests {
         let d = bvh.derivatives(&level);
         assert_eq!(d, tri.derivatives(0.25, 0.5, Some(&tilted)));
         assert!(d.dndu.x.abs() > 0.1, "{:?}", d.dndu);
+    }
+
+    /// A hit's surface point, with its triangle's frame from the per-thread cache, is the one its
+    /// triangle gives from scratch, on two BVHs queried in turn on one thread (same indices,
+    /// other triangles: a cache keyed by index alone fails) whose 300 triangles share the cache's
+    /// 256 slots (a cache that kept the first frame in a slot fails).
+    #[test]
+    fn cached_triangle_frames_are_the_triangles() {
+        let mut rng = stream(11, 0);
+        let mut r = || uniform(&mut rng);
+        let strip = |tilt: f64, uv: [[f32; 2]; 3]| -> Vec<Primitive> {
+            (0..300)
+                .map(|i| {
+                    let x = 2.0 * f64::from(i);
+                    Primitive::Triangle(Triangle {
+                        p: [
+                            DVec3::new(x, 0.0, 0.0),
+                            DVec3::new(x + 1.5, 0.0, tilt),
+                            DVec3::new(x, 1.5, -tilt),
+                        ],
+                        uv,
+                        flip: i % 3 == 0,
+                        shading: NO_SHADING,
+                    })
+                })
+                .collect()
+        };
+        let a = Bvh::new(strip(0.0, [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]));
+        let b = Bvh::new(strip(0.4, [[0.0, 0.0], [0.3, 2.0], [-1.0, 0.5]]));
+        assert_ne!(a.id, b.id);
+        for _ in 0..3000 {
+            let o = DVec3::new(2.0 * (300.0 * r()).floor() + 0.3, 0.3, 5.0);
+            for bvh in [&a, &b] {
+                let hit = bvh
+                    .closest_hit(o, -DVec3::Z, f64::INFINITY)
+                    .expect("a triangle");
+                let Primitive::Triangle(tri) = bvh.primitives[hit.point.primitive as usize] else {
+                    panic!("only triangles");
+                };
+                let [b1, b2] = hit.point.local;
+                assert_eq!(hit.point, tri.point(b1, b2, hit.point.primitive));
+            }
+        }
     }
 
     /// Occlusion with the last occluder tested first agrees with brute force, on bundles of

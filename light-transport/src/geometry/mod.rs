@@ -7,7 +7,7 @@ mod triangle;
 
 pub use ray::{Ray, offset_origin};
 pub use sphere::Sphere;
-pub use triangle::{NO_SHADING, Triangle, TriangleShading};
+pub use triangle::{NO_SHADING, Triangle, TriangleFrame, TriangleShading};
 
 use crate::math::DVec3;
 

@@ -21,6 +21,25 @@ pub struct TriangleShading {
     pub s: Option<[DVec3; 3]>,
 }
 
+/// What [`Triangle::frame`] gives: the parts of a triangle's surface points that do not depend on
+/// the point.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TriangleFrame {
+    /// Unit geometric normal ([`Triangle::normal`]).
+    pub n: DVec3,
+    /// Unit tangent along `∂p/∂u` (along the first edge where the texture coordinates are
+    /// degenerate).
+    pub tangent: DVec3,
+}
+
+impl TriangleFrame {
+    /// Zero normal and tangent (no triangle's).
+    pub const ZERO: Self = Self {
+        n: DVec3::ZERO,
+        tangent: DVec3::ZERO,
+    };
+}
+
 /// A triangle with optional per-vertex texture coordinates and shading data.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Triangle {
@@ -93,6 +112,17 @@ impl Triangle {
         )
     }
 
+    /// The parts of its surface points that a triangle shares at every point: the unit geometric
+    /// normal and the unit tangent along `∂p/∂u`.
+    pub fn frame(&self) -> TriangleFrame {
+        let (e1, e2) = (self.p[1] - self.p[0], self.p[2] - self.p[0]);
+        let dpdu = UvInverse::of(self.uv_f64()).first(e1, e2);
+        TriangleFrame {
+            n: self.normal(),
+            tangent: dpdu.try_normalize().unwrap_or_else(|| e1.normalize()),
+        }
+    }
+
     /// The surface point at barycentrics `(b1, b2)` with the triangle's shading data (without its
     /// [`Derivatives`]: [`Triangle::derivatives`]).
     pub fn point_shaded(
@@ -102,21 +132,34 @@ impl Triangle {
         primitive: u32,
         shading: Option<&TriangleShading>,
     ) -> SurfacePoint {
-        let (p, n) = self.position(b1, b2);
+        self.point_framed(b1, b2, primitive, shading, &self.frame())
+    }
+
+    /// [`Triangle::point_shaded`] with the triangle's [`Triangle::frame`] given (the BVH keeps one
+    /// per triangle, so a hit does not recompute it).
+    #[inline]
+    pub fn point_framed(
+        &self,
+        b1: f64,
+        b2: f64,
+        primitive: u32,
+        shading: Option<&TriangleShading>,
+        frame: &TriangleFrame,
+    ) -> SurfacePoint {
         let b0 = 1.0 - b1 - b2;
+        let p = self.p[0] * b0 + self.p[1] * b1 + self.p[2] * b2;
+        let n = frame.n;
         let t = self.uv_f64();
         let uv = [
             t[0][0] * b0 + t[1][0] * b1 + t[2][0] * b2,
             t[0][1] * b0 + t[1][1] * b1 + t[2][1] * b2,
         ];
-        let (e1, e2) = (self.p[1] - self.p[0], self.p[2] - self.p[0]);
-        let dpdu = UvInverse::of(t).first(e1, e2);
         let mut point = SurfacePoint {
             p,
             n,
             ns: n,
             uv,
-            tangent: dpdu.try_normalize().unwrap_or_else(|| e1.normalize()),
+            tangent: frame.tangent,
             local: [b1, b2],
             primitive,
         };
