@@ -8,8 +8,9 @@
 //! two-sided light uses the first direction number to choose the side (front for `u < 1/2`) and
 //! rescales it.
 
-use crate::accel::Primitive;
+use crate::accel::{Bvh, Primitive};
 use crate::geometry::SurfacePoint;
+use crate::geometry::Triangle;
 use crate::math::{DVec3, Frame, clamp_unit};
 use crate::spectrum::Rgb;
 use std::f64::consts::PI;
@@ -92,14 +93,18 @@ impl LightKind {
         }
     }
 
-    /// Sample a point uniformly on the light (area measure), as for next-event estimation.
-    pub fn sample_point(&self, prims: &[Primitive], u: [f64; 2]) -> Option<(SurfacePoint, f64)> {
+    /// Sample a point uniformly on the light (area measure), as for next-event estimation. A
+    /// triangle's normal and tangent come from the BVH's per-thread cache ([`Bvh::frame`]).
+    pub fn sample_point(&self, bvh: &Bvh, u: [f64; 2]) -> Option<(SurfacePoint, f64)> {
         match *self {
             LightKind::Area {
                 primitive, area, ..
             } => {
-                let p = match prims.get(primitive as usize)? {
-                    Primitive::Triangle(t) => t.sample(u, primitive),
+                let p = match bvh.primitives.get(primitive as usize)? {
+                    Primitive::Triangle(t) => {
+                        let (b1, b2) = Triangle::sample_barycentrics(u);
+                        t.point_framed(b1, b2, primitive, None, &bvh.frame(t, primitive))
+                    }
                     Primitive::Sphere(s) => s.sample(u, primitive),
                 };
                 Some((p, 1.0 / area))
@@ -112,13 +117,16 @@ impl LightKind {
 
     /// Position and normal of [`LightKind::sample_point`]'s point, with its density: what
     /// next-event estimation needs, without the point's texture coordinates and derivatives.
-    pub fn sample_position(&self, prims: &[Primitive], u: [f64; 2]) -> Option<(DVec3, DVec3, f64)> {
+    pub fn sample_position(&self, bvh: &Bvh, u: [f64; 2]) -> Option<(DVec3, DVec3, f64)> {
         match *self {
             LightKind::Area {
                 primitive, area, ..
             } => {
-                let (p, n) = match prims.get(primitive as usize)? {
-                    Primitive::Triangle(t) => t.sample_position(u),
+                let (p, n) = match bvh.primitives.get(primitive as usize)? {
+                    Primitive::Triangle(t) => {
+                        let (b1, b2) = Triangle::sample_barycentrics(u);
+                        (t.at(b1, b2), bvh.frame(t, primitive).n)
+                    }
                     Primitive::Sphere(s) => s.sample_position(u),
                 };
                 Some((p, n, 1.0 / area))
@@ -130,13 +138,13 @@ impl LightKind {
     /// Sample an emitted ray from the position numbers `u_pos` and direction numbers `u_dir`.
     pub fn sample_emission(
         &self,
-        prims: &[Primitive],
+        bvh: &Bvh,
         u_pos: [f64; 2],
         u_dir: [f64; 2],
     ) -> Option<EmissionSample> {
         match *self {
             LightKind::Area { .. } => {
-                let (point, pdf_pos) = self.sample_point(prims, u_pos)?;
+                let (point, pdf_pos) = self.sample_point(bvh, u_pos)?;
                 let (w, pdf_dir) = self.sample_direction(point.n, u_dir)?;
                 Some(EmissionSample {
                     point,
@@ -346,13 +354,13 @@ impl LightDistribution {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::{NO_SHADING, Sphere, Triangle};
+    use crate::geometry::{NO_SHADING, Sphere};
 
     /// Next-event estimation's `sample_position` is `sample_point`'s position, normal and density,
     /// bit for bit, on triangles and spheres facing either way and on point lights.
     #[test]
     fn sample_position_is_sample_points() {
-        let prims = vec![
+        let bvh = Bvh::new(vec![
             Primitive::Triangle(Triangle {
                 p: [
                     DVec3::new(0.1, 0.2, 0.3),
@@ -379,8 +387,8 @@ mod tests {
                 radius: 1.3,
                 flip: true,
             }),
-        ];
-        let mut lights: Vec<LightKind> = (0..prims.len() as u32)
+        ]);
+        let mut lights: Vec<LightKind> = (0..bvh.primitives.len() as u32)
             .map(|primitive| LightKind::Area {
                 primitive,
                 radiance: Rgb::WHITE,
@@ -399,8 +407,15 @@ mod tests {
                     mcmc_core::rng::uniform(&mut rng),
                     mcmc_core::rng::uniform(&mut rng),
                 ];
-                let (point, pdf) = light.sample_point(&prims, u).expect("a point");
-                let (p, n, pdf_p) = light.sample_position(&prims, u).expect("a position");
+                let (point, pdf) = light.sample_point(&bvh, u).expect("a point");
+                let (p, n, pdf_p) = light.sample_position(&bvh, u).expect("a position");
+                if let LightKind::Area { primitive, .. } = *light {
+                    let own = match bvh.primitives[primitive as usize] {
+                        Primitive::Triangle(t) => t.sample(u, primitive),
+                        Primitive::Sphere(s) => s.sample(u, primitive),
+                    };
+                    assert_eq!(point, own);
+                }
                 let bits = |v: DVec3| v.to_array().map(f64::to_bits);
                 assert_eq!((bits(p), bits(n)), (bits(point.p), bits(point.n)));
                 assert_eq!(pdf.to_bits(), pdf_p.to_bits());
@@ -410,7 +425,7 @@ mod tests {
 
     #[test]
     fn emission_inverts() {
-        let prims = vec![
+        let bvh = Bvh::new(vec![
             Primitive::Triangle(Triangle {
                 p: [DVec3::ZERO, DVec3::X, DVec3::Y],
                 uv: [[0.0; 2]; 3],
@@ -422,22 +437,28 @@ mod tests {
                 radius: 0.5,
                 flip: false,
             }),
-        ];
+        ]);
+        let triangle = bvh
+            .primitives
+            .iter()
+            .position(|p| matches!(p, Primitive::Triangle(_)))
+            .expect("a triangle") as u32;
+        let sphere = 1 - triangle;
         let lights = [
             LightKind::Area {
-                primitive: 0,
+                primitive: triangle,
                 radiance: Rgb::WHITE,
                 two_sided: false,
                 area: 0.5,
             },
             LightKind::Area {
-                primitive: 0,
+                primitive: triangle,
                 radiance: Rgb::WHITE,
                 two_sided: true,
                 area: 0.5,
             },
             LightKind::Area {
-                primitive: 1,
+                primitive: sphere,
                 radiance: Rgb::WHITE,
                 two_sided: false,
                 area: PI,
@@ -449,9 +470,9 @@ mod tests {
         ];
         for l in lights {
             for (up, ud) in [([0.2, 0.7], [0.3, 0.6]), ([0.9, 0.1], [0.8, 0.25])] {
-                let e = l.sample_emission(&prims, up, ud).unwrap();
+                let e = l.sample_emission(&bvh, up, ud).unwrap();
                 let (p2, d2) = l
-                    .invert_emission(&prims, e.point.p, e.w, [up[0], up[1], 0.0, 0.0])
+                    .invert_emission(&bvh.primitives, e.point.p, e.w, [up[0], up[1], 0.0, 0.0])
                     .unwrap();
                 for (a, b) in up.iter().chain(&ud).zip(p2.iter().chain(&d2)) {
                     assert!(

@@ -624,14 +624,14 @@ impl Bvh {
         })
     }
 
-    /// [`Triangle::frame`] of `tri`, primitive `index`, from this thread's cache of recently hit
-    /// triangles' frames (direct-mapped on the index, keyed by BVH and index), computed and kept
+    /// [`Triangle::frame`] of `tri`, primitive `index` of this BVH, from this thread's cache of
+    /// recently hit or sampled triangles' frames (direct-mapped on the index, keyed by BVH and index), computed and kept
     /// there on a miss. Hits come back to the same triangles often (a Metropolis chain's
     /// perturbations most of all), and a frame costs a division and two square roots; keeping one
     /// per triangle instead would add 48 bytes to each (the 1M-triangle terrain's peak 200 →
     /// 245 MB). Exact either way: a frame is a function of its triangle alone.
     #[inline]
-    fn frame(&self, tri: &Triangle, index: u32) -> TriangleFrame {
+    pub fn frame(&self, tri: &Triangle, index: u32) -> TriangleFrame {
         let key = (u64::from(self.id) << 32) | u64::from(index);
         FRAMES.with(|cache| {
             let mut cache = cache.borrow_mut();

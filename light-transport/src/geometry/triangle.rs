@@ -105,11 +105,14 @@ impl Triangle {
     /// the rest of the surface point.
     #[inline]
     pub fn position(&self, b1: f64, b2: f64) -> (DVec3, DVec3) {
+        (self.at(b1, b2), self.normal())
+    }
+
+    /// The position at barycentrics `(b1, b2)`.
+    #[inline]
+    pub fn at(&self, b1: f64, b2: f64) -> DVec3 {
         let b0 = 1.0 - b1 - b2;
-        (
-            self.p[0] * b0 + self.p[1] * b1 + self.p[2] * b2,
-            self.normal(),
-        )
+        self.p[0] * b0 + self.p[1] * b1 + self.p[2] * b2
     }
 
     /// The parts of its surface points that a triangle shares at every point: the unit geometric
@@ -147,7 +150,7 @@ impl Triangle {
         frame: &TriangleFrame,
     ) -> SurfacePoint {
         let b0 = 1.0 - b1 - b2;
-        let p = self.p[0] * b0 + self.p[1] * b1 + self.p[2] * b2;
+        let p = self.at(b1, b2);
         let n = frame.n;
         let t = self.uv_f64();
         let uv = [
@@ -243,7 +246,7 @@ impl Triangle {
 
     /// The barycentrics `(b1, b2)` uniform area sampling maps `u` to.
     #[inline]
-    fn sample_barycentrics(u: [f64; 2]) -> (f64, f64) {
+    pub fn sample_barycentrics(u: [f64; 2]) -> (f64, f64) {
         let s = u[0].sqrt();
         (1.0 - s, u[1] * s)
     }

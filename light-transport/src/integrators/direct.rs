@@ -45,7 +45,7 @@ pub fn next_event(
         return Rgb::BLACK;
     };
     let light = &scene.lights[li];
-    let Some((lp, ln, pdf_area)) = light.sample_position(&scene.bvh.primitives, u_light) else {
+    let Some((lp, ln, pdf_area)) = light.sample_position(&scene.bvh, u_light) else {
         return Rgb::BLACK;
     };
     let d = lp - p.p;

@@ -32,7 +32,6 @@ pub fn probe_cases(
 ) -> Vec<ProbeCase> {
     let mut rng = stream(seed, 0x3A11);
     let scale = (scene.bounds.1 - scene.bounds.0).length();
-    let prims = &scene.bvh.primitives;
     let mut out = Vec::new();
     for _ in 0..50 * n {
         if out.len() >= n {
@@ -45,7 +44,8 @@ pub fn probe_cases(
         let LightKind::Area { primitive, .. } = *light else {
             continue;
         };
-        let Some((point, _)) = light.sample_point(prims, [uniform(&mut rng), uniform(&mut rng)])
+        let Some((point, _)) =
+            light.sample_point(&scene.bvh, [uniform(&mut rng), uniform(&mut rng)])
         else {
             continue;
         };

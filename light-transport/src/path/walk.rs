@@ -210,7 +210,7 @@ pub fn light_subpath_with<S: SampleStream>(
         return;
     };
     let light = &scene.lights[li];
-    let Some(es) = light.sample_emission(&scene.bvh.primitives, u_pos, u_dir) else {
+    let Some(es) = light.sample_emission(&scene.bvh, u_pos, u_dir) else {
         return;
     };
     let pdf_origin = p_choice * es.pdf_pos;

@@ -426,7 +426,7 @@ impl Mutation for UserPathProposal<'_> {
         }
         let l = &self.scene.lights[u.light];
         let (point, _) = l
-            .sample_point(&self.scene.bvh.primitives, [uniform(rng), uniform(rng)])
+            .sample_point(&self.scene.bvh, [uniform(rng), uniform(rng)])
             .ok_or(Failure::Failed)?;
         let mut light_part: Vec<Vertex> = Vec::with_capacity(m + 1);
         light_part.push(endpoint(

@@ -116,7 +116,7 @@ pub fn extend(
 pub fn light_endpoint(scene: &Scene, rng: &mut ChainRng) -> Option<Vertex> {
     let (li, _) = scene.light_distribution.sample(uniform(rng))?;
     let u = [uniform(rng), uniform(rng)];
-    let (point, _) = scene.lights[li].sample_point(&scene.bvh.primitives, u)?;
+    let (point, _) = scene.lights[li].sample_point(&scene.bvh, u)?;
     Some(endpoint(VertexKind::Light { light: li as u32 }, point))
 }
 
