@@ -61,39 +61,8 @@ impl Primitive {
         }
     }
 
-    /// The surface point of a hit found by [`Primitive::intersect_t`] (`shading`: the scene's
-    /// table of triangle shading data; `frame`: a triangle's [`Triangle::frame`], computed here
-    /// when not given).
-    #[inline]
-    fn hit_point(
-        &self,
-        o: DVec3,
-        d: DVec3,
-        (t, b1, b2): (f64, f64, f64),
-        index: u32,
-        shading: &[TriangleShading],
-        frame: Option<&TriangleFrame>,
-    ) -> Hit {
-        match self {
-            Primitive::Triangle(tri) => Hit {
-                t,
-                point: tri.point_framed(
-                    b1,
-                    b2,
-                    index,
-                    shading.get(tri.shading as usize),
-                    &frame.copied().unwrap_or_else(|| tri.frame()),
-                ),
-            },
-            Primitive::Sphere(s) => Hit {
-                t,
-                point: s.point(o + d * t, index),
-            },
-        }
-    }
-
-    /// The differential geometry of `point`, a point on this primitive (`shading`: as in
-    /// [`Primitive::hit_point`]). A triangle's always come from its shading table, as a hit's
+    /// The differential geometry of `point`, a point on this primitive (`shading`: the scene's
+    /// table of triangle shading data). A triangle's always come from its shading table, as a hit's
     /// point does, even where the interpolated normal happens to equal the geometric one (`∂n/∂u`
     /// need not vanish there). A point sampled on a light carries the geometric normal but gets
     /// the same derivatives; manifold chains read `∂n/∂u` only at their interior vertices.
@@ -108,10 +77,16 @@ impl Primitive {
         }
     }
 
+    /// The flat surface point where the ray first hits this primitive, without the BVH (the
+    /// tests' brute force).
     #[cfg(test)]
     fn intersect(&self, o: DVec3, d: DVec3, t_max: f64, index: u32) -> Option<Hit> {
-        self.intersect_t(o, d, t_max)
-            .map(|h| self.hit_point(o, d, h, index, &[], None))
+        let (t, b1, b2) = self.intersect_t(o, d, t_max)?;
+        let point = match self {
+            Primitive::Triangle(tri) => tri.point(b1, b2, index),
+            Primitive::Sphere(s) => s.point(o + d * t, index),
+        };
+        Some(Hit { t, point })
     }
 
     #[inline]
@@ -614,19 +589,29 @@ impl Bvh {
                 });
             }
         );
-        best.map(|(h, index)| {
-            let primitive = &self.primitives[index as usize];
-            let frame = match primitive {
-                Primitive::Triangle(tri) => Some(self.frame(tri, index)),
-                Primitive::Sphere(_) => None,
-            };
-            primitive.hit_point(o, d, h, index, &self.shading, frame.as_ref())
-        })
+        best.map(|(h, index)| self.hit_point(o, d, h, index))
+    }
+
+    /// The surface point of a hit on primitive `index` found by [`Primitive::intersect_t`], with
+    /// a triangle's shading data and its cached [`Bvh::frame`].
+    #[inline(always)]
+    fn hit_point(&self, o: DVec3, d: DVec3, (t, b1, b2): (f64, f64, f64), index: u32) -> Hit {
+        let point = match &self.primitives[index as usize] {
+            Primitive::Triangle(tri) => tri.point_framed(
+                b1,
+                b2,
+                index,
+                self.shading.get(tri.shading as usize),
+                &self.frame(tri, index),
+            ),
+            Primitive::Sphere(s) => s.point(o + d * t, index),
+        };
+        Hit { t, point }
     }
 
     /// [`Triangle::frame`] of `tri`, primitive `index` of this BVH, from this thread's cache of
-    /// recently hit or sampled triangles' frames (direct-mapped on the index, keyed by BVH and index), computed and kept
-    /// there on a miss. Hits come back to the same triangles often (a Metropolis chain's
+    /// recently hit or sampled triangles' frames (direct-mapped on the index, keyed by BVH and
+    /// index), computed and kept there on a miss. Hits come back to the same triangles often (a Metropolis chain's
     /// perturbations most of all), and a frame costs a division and two square roots; keeping one
     /// per triangle instead would add 48 bytes to each (the 1M-triangle terrain's peak 200 →
     /// 245 MB). Exact either way: a frame is a function of its triangle alone.

@@ -138,8 +138,8 @@ impl Triangle {
         self.point_framed(b1, b2, primitive, shading, &self.frame())
     }
 
-    /// [`Triangle::point_shaded`] with the triangle's [`Triangle::frame`] given (the BVH keeps one
-    /// per triangle, so a hit does not recompute it).
+    /// [`Triangle::point_shaded`] with the triangle's [`Triangle::frame`] given (the BVH caches
+    /// recent ones per thread, so a hit seldom recomputes it).
     #[inline]
     pub fn point_framed(
         &self,
