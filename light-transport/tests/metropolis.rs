@@ -372,11 +372,14 @@ impl<M: Method> Method for Declared<M> {
     }
 }
 
-/// The refined normalisation `b` of 20 runs of `m` on `scene` (a bootstrap of 1000 samples per
-/// group, `mutations` per pixel, seeds from 300), checking that the chains drew more than
-/// `at_least` independent samples in each.
+/// Runs on each side of the refinement tests' comparison.
+const REFINEMENT_RUNS: u64 = 40;
+
+/// The refined normalisation `b` of [`REFINEMENT_RUNS`] runs of `m` on `scene` (a bootstrap of
+/// 1000 samples per group, `mutations` per pixel, seeds from 300), checking that the chains drew
+/// more than `at_least` independent samples in each.
 fn refined_b<M: Method>(scene: &Scene, m: &M, mutations: f64, at_least: u64) -> Vec<Vec<f64>> {
-    (0..20)
+    (0..REFINEMENT_RUNS)
         .map(|r| {
             let s = MetropolisSettings {
                 seed: 300 + r,
@@ -393,14 +396,16 @@ fn refined_b<M: Method>(scene: &Scene, m: &M, mutations: f64, at_least: u64) -> 
         .collect()
 }
 
-/// The bootstrap's `b` alone in 20 other runs of `m` (seeds from 600): unbiased by construction.
+/// The bootstrap's `b` alone in [`REFINEMENT_RUNS`] other runs of `m` (seeds from 600), each
+/// with 4000 samples per group: unbiased by construction, and a quarter of the refined runs'
+/// bootstrap variance, so that the comparison's noise is mostly the refined side's.
 fn bootstrap_b<M: Method>(scene: &Scene, m: &M) -> Vec<Vec<f64>> {
-    (0..20)
+    (0..REFINEMENT_RUNS)
         .map(|r| {
             let s = MetropolisSettings {
                 seed: 600 + r,
                 refine_normalisation: false,
-                ..settings(1000, 0.01, 0)
+                ..settings(4000, 0.01, 0)
             };
             vec![
                 metropolis::run(scene, m, &s, |_, _, _| true)
@@ -452,13 +457,15 @@ fn refinement_agrees_with_bootstraps<M: Method>(
 
 /// Path-space MLT refines its normalisation with its new-path candidates, each a bootstrap
 /// sample of its own length (weight `(k + 1) I`, `PathState::independent_weight`). On cornell
-/// (36×30, 6 edges, a bootstrap of 1000 paths per length, 32 mutations per pixel: about 3500 new
-/// paths per run), the refined `b` of 20 runs agrees with the bootstrap's `b` of 20 other runs
-/// (Welch test, α = 1e-4; the bootstrap is unbiased by construction). The bidirectional mutation
-/// declared as the independent proposals is caught. How much the refinement steadies `b` is
-/// printed, not asserted: the weights are heavy-tailed here, and 20 runs' standard deviations
-/// put the ratio anywhere from 0.74× to 1.56× as the settings change (measured); the README's
-/// figures come from full renders.
+/// (36×30, 6 edges, a bootstrap of 1000 paths per length, 128 mutations per pixel: about 14 000
+/// new paths per run), the refined `b` of 40 runs agrees with the bootstrap's `b` of 40 other
+/// runs (Welch test, α = 1e-4; the bootstrap is unbiased by construction). The bidirectional
+/// mutation declared as the independent proposals is caught. (At 32 mutations per pixel and 20
+/// runs a side it was caught only at p = 2.2e-3 once new paths drew from `FastRng`; 40 runs and
+/// 64 mutations gave 1.8e-5, 128 mutations 2.3e-6, while the sound refinement read 0.41–0.79.)
+/// How much the refinement steadies `b` is printed, not asserted: the weights are heavy-tailed
+/// here, and the runs' standard deviations put the ratio anywhere from 0.74× to 1.56× as the
+/// settings change (measured); the README's figures come from full renders.
 #[test]
 fn path_space_mlt_refines_its_normalisation_with_its_new_paths() {
     let scene = Scene::new(&builtin::builtin("cornell").unwrap(), Some((W, H))).unwrap();
@@ -468,14 +475,15 @@ fn path_space_mlt_refines_its_normalisation_with_its_new_paths() {
         declared: light_transport::pathspace::mutations::index_of("bidirectional"),
         stratified: true,
     };
-    refinement_agrees_with_bootstraps("path-space MLT", &scene, &mlt(), &broken, 32.0, 2000);
+    refinement_agrees_with_bootstraps("path-space MLT", &scene, &mlt(), &broken, 128.0, 8000);
 }
 
 /// Charted MLT refines its normalisation with its large steps, uniform in the chain's technique
 /// chart: each a bootstrap sample of that chart's stratum (the bootstrap picks the chart
 /// uniformly), combined stratum by stratum (`NormalisationTally`). Same protocol as path-space
 /// MLT's above (cornell, 36×30, 6 edges, 16 mutations per pixel: about 3000 large steps per
-/// run; measured: the refined `b` scatters 0.38× as much as the bootstrap's). The same large
+/// run, 40 runs a side; measured: the refined `b` scatters 0.38× as much as a bootstrap of 1000
+/// per group, 0.62× as much as the comparison's bootstrap of 4000). The same large
 /// steps averaged as one stratum are caught: the chains visit a chart in proportion to its
 /// share of `b`, so the plain mean of their candidates' weights is too high. (Small steps
 /// declared as the independent proposals are not reliably caught here, p = 0.05–0.08: in the

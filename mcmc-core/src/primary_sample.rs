@@ -59,13 +59,13 @@ pub struct PrimarySample {
     rng: CoordinateRng,
 }
 
-/// The generator a state draws its lazy coordinates and small steps from: xoshiro256++
-/// (Blackman and Vigna 2021), seeded by SplitMix64 from one number of the chain's [`ChainRng`]
-/// at every proposal. A candidate uses a few dozen numbers before it is accepted or dropped;
-/// keying a ChaCha8 generator per candidate and filling its four-block buffer cost more than the
-/// numbers themselves (3.5% of the instructions of a multiplexed MLT render in this workspace's
-/// renderer).
-type CoordinateRng = rand_xoshiro::Xoshiro256PlusPlus;
+/// The generator a state draws its lazy coordinates and small steps from: the shared
+/// [`FastRng`](crate::rng::FastRng) (xoshiro256++), seeded by SplitMix64 from one number of the
+/// chain's [`ChainRng`] at every proposal. A candidate uses a few dozen numbers before it is
+/// accepted or dropped; keying a ChaCha8 generator per candidate and filling its four-block buffer
+/// cost more than the numbers themselves (3.5% of the instructions of a multiplexed MLT render in
+/// this workspace's renderer).
+type CoordinateRng = crate::rng::FastRng;
 
 impl Clone for PrimarySample {
     fn clone(&self) -> Self {

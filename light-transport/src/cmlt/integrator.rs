@@ -365,7 +365,7 @@ impl Cmlt {
             state.move_to(0, std::iter::empty());
             return 0.0;
         }
-        let mut rng = stream(seed, 0);
+        let mut rng = mcmc_core::rng::fast_stream(seed, 0);
         let s = uniform_index(uniform(&mut rng), k + 1);
         let atlas = self.atlas(scene, k);
         let target = Self::target(&atlas);

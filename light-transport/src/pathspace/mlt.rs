@@ -110,7 +110,7 @@ impl PathMlt {
         if k < self.mutations.min_edges {
             return 0.0;
         }
-        let mut stream = IndependentStream::new(mcmc_core::rng::stream(seed, 0));
+        let mut stream = IndependentStream::new(mcmc_core::rng::fast_stream(seed, 0));
         NewPath::sample(scene, self.mutations.importance, k, &mut stream, state);
         (k + 1) as f64 * state.contribution.importance
     }

@@ -135,7 +135,9 @@ impl Mutation for NewPathMutation<'_> {
     fn propose(&self, x: &PathState, rng: &mut ChainRng, y: &mut PathState) -> Result<(), Failure> {
         let lengths = &self.new_path.length_probability;
         let k = categorical(lengths, uniform(rng)).map_or(lengths.len(), |i| i + 1);
-        let mut stream = IndependentStream::new(mcmc_core::rng::stream(
+        // A generator of its own, seeded from the chain's: cheap to set up for the few dozen
+        // numbers one new path reads (`FastRng`).
+        let mut stream = IndependentStream::new(mcmc_core::rng::fast_stream(
             rand::Rng::next_u64(rng),
             NEW_PATH_STREAM,
         ));

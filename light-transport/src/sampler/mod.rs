@@ -140,20 +140,21 @@ impl<S: SampleStream + ?Sized> SampleStream for &mut S {
     }
 }
 
-/// Fresh independent numbers from a [`ChainRng`]; positions are tracked (skipped numbers are
-/// simply not drawn), so the stream is a valid "replayable" source for statistics but not for
-/// replay.
+/// Fresh independent numbers from a generator: a [`ChainRng`] by default, or a
+/// [`FastRng`](mcmc_core::rng::FastRng) for a stream that lives for one path (a new-path
+/// proposal, a bootstrap sample). Positions are tracked (skipped numbers are simply not drawn),
+/// so the stream is a valid "replayable" source for statistics but not for replay.
 #[derive(Clone, Debug)]
-pub struct IndependentStream {
+pub struct IndependentStream<R = ChainRng> {
     /// The generator.
-    pub rng: ChainRng,
+    pub rng: R,
     current: usize,
     pos: [usize; STREAMS],
 }
 
-impl IndependentStream {
+impl<R> IndependentStream<R> {
     /// A stream drawing from `rng`.
-    pub fn new(rng: ChainRng) -> Self {
+    pub fn new(rng: R) -> Self {
         Self {
             rng,
             current: 0,
@@ -173,7 +174,7 @@ impl IndependentStream {
     }
 }
 
-impl SampleStream for IndependentStream {
+impl<R: rand::Rng> SampleStream for IndependentStream<R> {
     fn start_stream(&mut self, index: usize) {
         self.current = index;
     }
