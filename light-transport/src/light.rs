@@ -267,10 +267,10 @@ impl LightKind {
 /// Cosine-weighted hemisphere about `+z`: `φ = 2π u0`, `cos θ = √u1` (the charted-MLT paper's
 /// Lambert mapping, eq. 31).
 pub fn cosine_hemisphere(u: [f64; 2]) -> DVec3 {
-    let phi = 2.0 * PI * u[0];
+    let (cos_p, sin_p) = crate::math::turn(u[0]);
     let cos = u[1].sqrt();
     let sin = (1.0 - u[1]).max(0.0).sqrt();
-    DVec3::new(sin * phi.cos(), sin * phi.sin(), cos)
+    DVec3::new(sin * cos_p, sin * sin_p, cos)
 }
 
 /// Inverse of [`cosine_hemisphere`] (eq. 32).
@@ -285,8 +285,8 @@ pub fn invert_cosine_hemisphere(w: DVec3) -> [f64; 2] {
 pub fn uniform_sphere(u: [f64; 2]) -> DVec3 {
     let z = 1.0 - 2.0 * u[0];
     let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * PI * u[1];
-    DVec3::new(r * phi.cos(), r * phi.sin(), z)
+    let (cos_p, sin_p) = crate::math::turn(u[1]);
+    DVec3::new(r * cos_p, r * sin_p, z)
 }
 
 /// Inverse of [`uniform_sphere`].

@@ -37,9 +37,9 @@ impl Lambert {
     pub fn sample(&self, wo: DVec3, u: [f64; 2]) -> Option<LobeSample> {
         let cos_t = u[1].clamp(0.0, 1.0).sqrt();
         let sin_t = (1.0 - u[1].clamp(0.0, 1.0)).sqrt();
-        let p = 2.0 * PI * u[0];
+        let (cos_p, sin_p) = crate::math::turn(u[0]);
         let z = if wo.z < 0.0 { -cos_t } else { cos_t };
-        let wi = DVec3::new(sin_t * p.cos(), sin_t * p.sin(), z);
+        let wi = DVec3::new(sin_t * cos_p, sin_t * sin_p, z);
         (cos_t > 0.0 && wo.z != 0.0).then_some(LobeSample::smooth(wi))
     }
 

@@ -115,9 +115,9 @@ impl Ggx {
         }
         let (v, t1, t2) = self.basis(wo);
         let r = u[1].clamp(0.0, 1.0).sqrt();
-        let phi = 2.0 * PI * u[0];
-        let p1 = r * phi.cos();
-        let p2 = r * phi.sin();
+        let (cos_p, sin_p) = crate::math::turn(u[0]);
+        let p1 = r * cos_p;
+        let p2 = r * sin_p;
         let s = 0.5 * (1.0 + v.z);
         let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
         let lift = (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();

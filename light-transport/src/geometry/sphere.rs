@@ -129,8 +129,8 @@ impl Sphere {
     fn sample_raw(&self, u: [f64; 2]) -> DVec3 {
         let z = 1.0 - 2.0 * u[0];
         let r = (1.0 - z * z).max(0.0).sqrt();
-        let phi = 2.0 * PI * u[1];
-        self.center + DVec3::new(r * phi.cos(), r * phi.sin(), z) * self.radius
+        let (cos_p, sin_p) = crate::math::turn(u[1]);
+        self.center + DVec3::new(r * cos_p, r * sin_p, z) * self.radius
     }
 
     /// The numbers [`Sphere::sample`] maps to the point `p` on the sphere.

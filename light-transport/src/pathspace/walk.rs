@@ -10,7 +10,7 @@
 use super::state::PathState;
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, SurfacePoint, offset_origin};
-use crate::math::{DVec3, Frame};
+use crate::math::{DVec3, Frame, turn};
 use crate::path::{Subpath, Vertex, VertexKind, connect, technique_subpaths};
 use crate::sampler::SampleStream;
 use crate::scene::Scene;
@@ -162,22 +162,19 @@ pub fn exponential_radius_pdf(r: f64, r1: f64, r2: f64) -> f64 {
 /// Move a raster position by a distance exponentially distributed in `[r1, r2]` pixels in a
 /// uniform direction (density in the image plane `p(r) / (2π r)`, symmetric).
 pub fn pixel_offset(raster: [f64; 2], r1: f64, r2: f64, rng: &mut ChainRng) -> [f64; 2] {
-    let phi = TAU * uniform(rng);
+    let (cos_p, sin_p) = turn(uniform(rng));
     let r = exponential_radius(r1, r2, rng);
-    [raster[0] + r * phi.cos(), raster[1] + r * phi.sin()]
+    [raster[0] + r * cos_p, raster[1] + r * sin_p]
 }
 
 /// Rotate unit direction `w` by an angle exponentially distributed in `[θ1, θ2]` about a uniform
 /// axis perpendicular to it. The density in solid angle, `p(θ) / (2π sin θ)`, depends only on the
 /// angle between the two directions, so the move is symmetric.
 pub fn angular_offset(w: DVec3, theta1: f64, theta2: f64, rng: &mut ChainRng) -> DVec3 {
-    let phi = TAU * uniform(rng);
+    let (cos_p, sin_p) = turn(uniform(rng));
     let theta = exponential_radius(theta1, theta2, rng);
-    let local = DVec3::new(
-        theta.sin() * phi.cos(),
-        theta.sin() * phi.sin(),
-        theta.cos(),
-    );
+    let (sin_t, cos_t) = theta.sin_cos();
+    let local = DVec3::new(sin_t * cos_p, sin_t * sin_p, cos_t);
     Frame::from_normal(w).to_world(local).normalize()
 }
 
@@ -196,13 +193,10 @@ pub fn angular_offset_pdf(a: DVec3, b: DVec3, theta1: f64, theta2: f64) -> f64 {
 /// uniform in `[0, β)` and the azimuth uniform (Fan, Chenney & Lai 2005, §5.1 and §5.3). Its
 /// density in solid angle is [`cone_pdf`].
 pub fn cone_direction(axis: DVec3, beta: f64, rng: &mut ChainRng) -> DVec3 {
-    let phi = TAU * uniform(rng);
+    let (cos_p, sin_p) = turn(uniform(rng));
     let theta = beta * uniform(rng);
-    let local = DVec3::new(
-        theta.sin() * phi.cos(),
-        theta.sin() * phi.sin(),
-        theta.cos(),
-    );
+    let (sin_t, cos_t) = theta.sin_cos();
+    let local = DVec3::new(sin_t * cos_p, sin_t * sin_p, cos_t);
     Frame::from_normal(axis).to_world(local).normalize()
 }
 
