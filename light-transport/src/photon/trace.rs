@@ -18,7 +18,7 @@ use super::map::Photon;
 use crate::path::{Subpath, VertexKind, light_subpath};
 use crate::sampler::{IndependentStream, LIGHT_STREAM, SampleStream, layout};
 use crate::scene::Scene;
-use mcmc_core::rng::{uniform, uniform_index};
+use mcmc_core::rng::{FastRng, uniform, uniform_index};
 
 /// Positions of the light stream's emission numbers (choice, position, direction).
 const EMISSION: [usize; 5] = [
@@ -56,7 +56,7 @@ impl Strata {
 
 /// Subpath `i`'s numbers, with the emission numbers moved into their strata.
 struct StratifiedStream<'a> {
-    inner: IndependentStream,
+    inner: IndependentStream<FastRng>,
     strata: &'a Strata,
     i: usize,
     current: usize,
@@ -94,7 +94,8 @@ impl SampleStream for StratifiedStream<'_> {
 
 /// The photons of `paths` light subpaths of at most `max_edges` edges (a photon at the end of a
 /// subpath of `j` edges stands for light that arrives after `j` edges), subpath `i` drawn from
-/// stream `(seed, i)` with its emission stratified (module docs): `(global, caustic)`.
+/// `fast_stream(seed, i)` (a generator per subpath, cheap to set up for the few dozen numbers it
+/// reads) with its emission stratified (module docs): `(global, caustic)`.
 pub fn trace_photons(
     scene: &Scene,
     paths: u64,
@@ -113,7 +114,7 @@ pub fn trace_photons(
             let mut path = Subpath::new();
             for i in c * CHUNK..((c + 1) * CHUNK).min(paths) {
                 let mut stream = StratifiedStream {
-                    inner: IndependentStream::new(mcmc_core::rng::stream(seed, i)),
+                    inner: IndependentStream::new(mcmc_core::rng::fast_stream(seed, i)),
                     strata: &strata,
                     i: i as usize,
                     current: 0,
