@@ -3,9 +3,10 @@
 //! exact inverse (eq. 32), `(u0, u1) = (φ/2π, cos² θ)`.
 
 use super::lobes::{LobeSample, same_side};
-use crate::math::{DVec3, clamp_unit, phi};
+use crate::light::{cosine_hemisphere, invert_cosine_hemisphere};
+use crate::math::DVec3;
 use crate::spectrum::Rgb;
-use std::f64::consts::{FRAC_1_PI, PI};
+use std::f64::consts::FRAC_1_PI;
 
 /// A Lambertian lobe with reflectance `r`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,21 +34,21 @@ impl Lambert {
         }
     }
 
-    /// Cosine-weighted direction on `wo`'s side.
+    /// Cosine-weighted direction on `wo`'s side: the lights' [`cosine_hemisphere`] (eq. 31),
+    /// mirrored below the surface when `wo` is.
     pub fn sample(&self, wo: DVec3, u: [f64; 2]) -> Option<LobeSample> {
-        let cos_t = u[1].clamp(0.0, 1.0).sqrt();
-        let sin_t = (1.0 - u[1].clamp(0.0, 1.0)).sqrt();
-        let (cos_p, sin_p) = crate::math::turn(u[0]);
-        let z = if wo.z < 0.0 { -cos_t } else { cos_t };
-        let wi = DVec3::new(sin_t * cos_p, sin_t * sin_p, z);
-        (cos_t > 0.0 && wo.z != 0.0).then_some(LobeSample::smooth(wi))
+        let w = cosine_hemisphere([u[0], u[1].clamp(0.0, 1.0)]);
+        let wi = if wo.z < 0.0 {
+            DVec3::new(w.x, w.y, -w.z)
+        } else {
+            w
+        };
+        (w.z > 0.0 && wo.z != 0.0).then_some(LobeSample::smooth(wi))
     }
 
-    /// The numbers `(u0, u1)` that produce `wi` (eq. 32).
+    /// The numbers `(u0, u1)` that produce `wi` (eq. 32): [`invert_cosine_hemisphere`], whose
+    /// numbers do not depend on the side.
     pub fn invert(&self, wo: DVec3, wi: DVec3) -> Option<[f64; 2]> {
-        if !same_side(wo, wi) {
-            return None;
-        }
-        Some([clamp_unit(phi(wi) / (2.0 * PI)), clamp_unit(wi.z * wi.z)])
+        same_side(wo, wi).then(|| invert_cosine_hemisphere(wi))
     }
 }
