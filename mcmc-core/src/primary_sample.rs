@@ -162,41 +162,49 @@ impl PrimarySample {
     }
 
     /// Coordinate `index` of `stream`, created or brought up to date on demand.
+    #[inline]
     pub fn get(&mut self, stream: usize, index: usize) -> f64 {
         let Some(st) = self.streams.get_mut(stream) else {
             return 0.5; // out-of-range stream: callers are expected to stay within stream_count
         };
         if index >= st.values.len() {
-            // Coordinates arrive one at a time: room for a path's worth at once spares the
-            // vectors their doubling reallocations (a state is made per independent sample).
-            let wanted = (index + 1).max(FIRST_CAPACITY);
-            st.values.reserve(wanted - st.values.len());
-            st.modified.reserve(wanted - st.modified.len());
-            st.values.resize(index + 1, 0.0);
-            // A coordinate that never existed is "older than any large step".
-            st.modified.resize(index + 1, u64::MAX);
+            if st.values.capacity() == 0 {
+                // Coordinates arrive one at a time: room for a path's worth at once spares the
+                // vectors their doubling reallocations (a state is made per independent sample).
+                st.values.reserve(FIRST_CAPACITY.max(index + 1));
+                st.modified.reserve(FIRST_CAPACITY.max(index + 1));
+            }
+            // Coordinates skipped over never existed ("older than any large step"); the new one
+            // is a uniform number, already distributed as the kernel's stationary law, so it
+            // needs no catch-up.
+            if index > st.values.len() {
+                st.values.resize(index, 0.0);
+                st.modified.resize(index, u64::MAX);
+            }
+            let v = uniform(&mut self.rng);
+            st.values.push(v);
+            st.modified.push(self.iteration);
+            return v;
         }
-        let m = st.modified[index];
-        if m == u64::MAX {
-            // New: a uniform number is already distributed as the kernel's stationary law, so no
-            // catch-up is needed.
-            st.values[index] = uniform(&mut self.rng);
-            st.modified[index] = self.iteration;
-        } else if m < self.last_large {
+        let (value, modified) = (&mut st.values[index], &mut st.modified[index]);
+        if *modified == u64::MAX {
+            // Skipped over when a later coordinate was created: new, as above.
+            *value = uniform(&mut self.rng);
+            *modified = self.iteration;
+        } else if *modified < self.last_large {
             // Replaced by the most recent (accepted or pending) large step.
-            st.values[index] = uniform(&mut self.rng);
-            st.modified[index] = self.last_large;
+            *value = uniform(&mut self.rng);
+            *modified = self.last_large;
         }
-        let m = st.modified[index];
-        if m < self.iteration {
+        if *modified < self.iteration {
             // Small steps missed since it was last touched (the large step, if this iteration is
             // one, was handled above by last_large == iteration).
-            for _ in m..self.iteration {
-                st.values[index] = self.step.perturb(st.values[index], &mut self.rng);
+            for _ in *modified..self.iteration {
+                *value = self.step.perturb(*value, &mut self.rng);
             }
-            st.modified[index] = self.iteration;
+            *modified = self.iteration;
         }
-        st.values[index]
+        *value
     }
 
     /// The coordinates of a stream as they are (not brought up to date; for recording seeds).
