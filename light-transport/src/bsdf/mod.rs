@@ -269,6 +269,20 @@ impl Bsdf {
         u: [f64; 2],
         mode: TransportMode,
     ) -> Option<BsdfSample> {
+        self.sample_local(wo, u_lobe, u, mode).map(|(s, _)| s)
+    }
+
+    /// [`Bsdf::sample`], with the pair `(wo, wi)` in the local frame that
+    /// [`Bsdf::local_pair`]`(wo, s.wi)` would give, bit for bit: a random walk takes the reverse
+    /// density `pdf(s.wi, wo)` from it as [`Bsdf::pdf_local`]`(pair.reversed())`, without
+    /// bringing the two directions into the frame again.
+    pub fn sample_local(
+        &self,
+        wo: DVec3,
+        u_lobe: f64,
+        u: [f64; 2],
+        mode: TransportMode,
+    ) -> Option<(BsdfSample, LocalPair)> {
         let wo_world = wo;
         let wo = local(&self.frame, wo)?;
         if wo.z == 0.0 || !self.sides_agree(wo_world, wo) {
@@ -295,12 +309,15 @@ impl Bsdf {
         if !positive(pdf) || !pdf.is_finite() || !f.is_finite() {
             return None;
         }
-        Some(BsdfSample {
-            wi,
-            f,
-            pdf,
-            delta: s.delta,
-        })
+        Some((
+            BsdfSample {
+                wi,
+                f,
+                pdf,
+                delta: s.delta,
+            },
+            LocalPair { wo, wi: wl },
+        ))
     }
 
     /// `wo` and `wi` in the local frame, what [`Bsdf::eval`] and [`Bsdf::pdf`] compute first:

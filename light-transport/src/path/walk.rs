@@ -338,7 +338,7 @@ fn random_walk<S: SampleStream>(
         let u_lobe = stream.next_1d();
         stream.seek(block + layout::DIRECTION);
         let u = stream.next_2d();
-        let Some(bs) = bsdf.sample(vert.wo, u_lobe, u, mode) else {
+        let Some((bs, pair)) = bsdf.sample_local(vert.wo, u_lobe, u, mode) else {
             break;
         };
         if bs.pdf == 0.0 || bs.f.is_black() {
@@ -358,7 +358,8 @@ fn random_walk<S: SampleStream>(
         let (pdf_fwd, pdf_rev) = if bs.delta {
             (0.0, 0.0)
         } else {
-            (bs.pdf, bsdf.pdf(bs.wi, vert.wo))
+            // `bsdf.pdf(bs.wi, vert.wo)`, bit for bit.
+            (bs.pdf, bsdf.pdf_local(pair.reversed()))
         };
         pdf_dir = pdf_fwd;
         let rev = vert.to_area(pdf_rev, &path[prev], scene);
