@@ -167,7 +167,10 @@ mod tests {
             let peak = kappa / TAU;
             let k = VonMisesFisher::kappa_for_peak(peak);
             let got = VonMisesFisher::peak_density(k);
-            assert!((got / peak - 1.0).abs() < 4e-16, "κ {kappa}: {k}, {got} vs {peak}");
+            assert!(
+                (got / peak - 1.0).abs() < 4e-16,
+                "κ {kappa}: {k}, {got} vs {peak}"
+            );
         }
         let below = VonMisesFisher::kappa_for_peak(KAPPA_CLOSED / TAU * (1.0 - 1e-9));
         let at = VonMisesFisher::kappa_for_peak(KAPPA_CLOSED / TAU);
