@@ -502,16 +502,17 @@ impl Estimator for ErptWithoutMis {
             large_steps: None,
             tally: None,
         };
+        let mut rng = <ChainRng as rand::SeedableRng>::from_rng(stream.rng());
         for (state, _) in seeds {
             // Which strategy sampled it is lost in `seed_paths`: take the larger C*, which is
             // what a path tracer without MIS would see from its better technique.
             let e = state
                 .strategy_importance(0)
                 .max(state.strategy_importance(1));
-            let count = (e / self.0.quantum + uniform(stream.rng())).floor() as u64;
+            let count = (e / self.0.quantum + uniform(&mut rng)).floor() as u64;
             for _ in 0..count {
                 let mut chain = Chain::with_density(state.clone(), 0.0).unwrap();
-                m.run(&proposal, &mut chain, n, stream.rng(), &mut rec);
+                m.run(&proposal, &mut chain, n, &mut rng, &mut rec);
             }
         }
         Rgb::BLACK

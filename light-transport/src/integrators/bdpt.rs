@@ -17,7 +17,7 @@ use crate::path::{
 use crate::sampler::{PixelStream, SampleStream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
-use mcmc_core::rng::ChainRng;
+use mcmc_core::rng::FastRng;
 use std::cell::RefCell;
 
 thread_local! {
@@ -76,7 +76,7 @@ impl Bdpt {
         light: &[Vertex],
         camera: &[Vertex],
         splats: &mut Vec<Splat>,
-        rng: Option<&mut ChainRng>,
+        rng: Option<&mut FastRng>,
     ) -> Rgb {
         let mut l = Rgb::BLACK;
         self.strategies(scene, light, camera, rng, |c| match c.raster {
@@ -95,7 +95,7 @@ impl Bdpt {
         scene: &Scene,
         light: &[Vertex],
         camera: &[Vertex],
-        mut rng: Option<&mut ChainRng>,
+        mut rng: Option<&mut FastRng>,
         mut visit: impl FnMut(Strategy),
     ) {
         for t in 1..=camera.len() {

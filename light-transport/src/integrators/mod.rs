@@ -37,7 +37,7 @@ use crate::film::Film;
 use crate::sampler::{PixelSampler, PixelStream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
-use mcmc_core::rng::{Substreams, uniform};
+use mcmc_core::rng::{FastSubstreams, uniform};
 use std::time::{Duration, Instant};
 
 /// One sample of an unbiased estimator.
@@ -192,7 +192,7 @@ pub fn pass_stream(sampling: Sampling, pass: u64, pixel: usize) -> PixelStream {
 
 /// The streams of pass `pass`'s pixels ([`pass_stream`]), their generators keyed once.
 fn pass_streams(sampling: Sampling, pass: u64) -> impl Fn(usize) -> PixelStream {
-    let generators = Substreams::new(pass_key(sampling.seed, pass), PASS_PURPOSE);
+    let generators = FastSubstreams::new(pass_key(sampling.seed, pass), PASS_PURPOSE);
     move |pixel| {
         let rng = generators.get(pixel as u64);
         PixelStream::new(sampling.sampler, sampling.seed, pass, pixel, rng)
@@ -229,7 +229,7 @@ pub fn pass<E: Estimator>(
     let sampling = sampling.into();
     let key = pass_key(sampling.seed, pass);
     let streams = pass_streams(sampling, pass);
-    let fractions = Substreams::new(key, FRACTION_PURPOSE);
+    let fractions = FastSubstreams::new(key, FRACTION_PURPOSE);
     let run = |c: usize| -> ChunkResult {
         crate::accel::take_ray_count();
         let lo = (c * chunk).min(npix);

@@ -14,7 +14,7 @@
 use super::{Estimator, Splat};
 use crate::sampler::PixelStream;
 use crate::scene::Scene;
-use mcmc_core::rng::{ChainRng, stream, uniform};
+use mcmc_core::rng::{fast_stream, stream, uniform};
 
 /// Roulette on shadow rays of contributions below a luminance threshold.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,7 +29,7 @@ impl ShadowRoulette {
     /// when the ray is skipped (the contribution counts 0). Draws a number only below the
     /// threshold.
     #[inline]
-    pub fn survive(&self, lum: f64, rng: &mut ChainRng) -> Option<f64> {
+    pub fn survive<R: rand::Rng + ?Sized>(&self, lum: f64, rng: &mut R) -> Option<f64> {
         let q = lum / self.threshold;
         if q >= 1.0 {
             return Some(1.0);
@@ -61,7 +61,7 @@ pub fn mean_luminance<E: Estimator>(
     let mut sum = 0.0;
     for i in 0..samples {
         let pixel = ((uniform(&mut choose) * pixels as f64) as usize).min(pixels - 1);
-        let mut sampler = PixelStream::independent(stream(seed, i as u64));
+        let mut sampler = PixelStream::independent(fast_stream(seed, i as u64));
         splats.clear();
         let v = estimator.sample(scene, pixel, &mut sampler, &mut splats);
         let finite = |l: f64| if l.is_finite() { l } else { 0.0 };

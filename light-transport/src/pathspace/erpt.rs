@@ -43,8 +43,9 @@ use crate::sampler::{IndependentStream, PixelStream, SampleStream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use crate::{Error, Result};
-use mcmc_core::rng::{uniform, uniform_index};
+use mcmc_core::rng::{ChainRng, uniform, uniform_index};
 use mcmc_core::{Chain, Stats};
+use rand::SeedableRng;
 use std::sync::Mutex;
 
 /// ERPT settings.
@@ -297,6 +298,8 @@ impl Estimator for Erpt {
         else {
             return Rgb::BLACK;
         };
+        // The chains' generator, keyed from the pixel's numbers (chains draw from a `ChainRng`).
+        let mut rng = ChainRng::from_rng(stream.rng());
         let mut stats = Stats::default();
         let (mut chains, mut capped) = (0, 0);
         let max = self.settings.max_chains;
@@ -318,13 +321,13 @@ impl Estimator for Erpt {
                 max
             } else {
                 rec.b = self.quantum / n as f64;
-                (quanta + uniform(stream.rng())).floor() as u64
+                (quanta + uniform(&mut rng)).floor() as u64
             };
             for _ in 0..count {
                 let Ok(mut chain) = Chain::with_density(state.clone(), 0.0) else {
                     continue;
                 };
-                m.run(&proposal, &mut chain, n, stream.rng(), &mut rec);
+                m.run(&proposal, &mut chain, n, &mut rng, &mut rec);
                 stats.merge(&chain.stats);
                 chains += 1;
             }

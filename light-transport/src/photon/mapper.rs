@@ -28,7 +28,7 @@ use crate::path::{MisHeuristic, camera_ray};
 use crate::sampler::PixelStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
-use mcmc_core::rng::ChainRng;
+use mcmc_core::rng::FastRng;
 use mcmc_core::rng::uniform;
 
 /// Settings of photon mapping.
@@ -201,7 +201,7 @@ impl PhotonMapper {
     /// Radiance arriving along `ray` (toward its origin) through specular bounces from the camera
     /// or a delta lobe: emission met is added; at the first non-specular point, the estimate of
     /// the module docs. `edges` counts the edges used so far.
-    fn shade(&self, scene: &Scene, mut ray: Ray, mut edges: usize, rng: &mut ChainRng) -> Rgb {
+    fn shade(&self, scene: &Scene, mut ray: Ray, mut edges: usize, rng: &mut FastRng) -> Rgb {
         let mut beta = Rgb::WHITE;
         let mut l = Rgb::BLACK;
         let mut slot = None; // each vertex's BSDF, built in place
@@ -239,7 +239,7 @@ impl PhotonMapper {
         wo: crate::math::DVec3,
         bsdf: &crate::bsdf::Bsdf,
         edges: usize,
-        rng: &mut ChainRng,
+        rng: &mut FastRng,
     ) -> Rgb {
         let mode = TransportMode::Radiance;
         let mut l = Rgb::BLACK;
@@ -293,7 +293,7 @@ impl PhotonMapper {
         mut ray: Ray,
         pdf: f64,
         mut edges: usize,
-        rng: &mut ChainRng,
+        rng: &mut FastRng,
     ) -> Rgb {
         let mode = TransportMode::Radiance;
         let mut beta = Rgb::WHITE;
@@ -373,7 +373,7 @@ fn bounce(
     bsdf: &crate::bsdf::Bsdf,
     p: &crate::geometry::SurfacePoint,
     wo: crate::math::DVec3,
-    rng: &mut ChainRng,
+    rng: &mut FastRng,
 ) -> Option<(Rgb, Ray, f64, bool)> {
     let u_lobe = uniform(rng);
     let u = [uniform(rng), uniform(rng)];

@@ -34,7 +34,7 @@ use super::{
     CAMERA_BLOCK, CAMERA_STREAM, IndependentStream, LIGHT_BLOCK, LIGHT_STREAM, STREAMS,
     SampleStream, VERTEX_BLOCK,
 };
-use mcmc_core::ChainRng;
+use mcmc_core::rng::FastRng;
 use mcmc_core::rng::uniform;
 use rand::Rng;
 
@@ -73,7 +73,7 @@ pub struct PixelStream {
     /// Independent numbers and the positions of the substreams: the whole stream for
     /// [`PixelSampler::Independent`], the low bits of the Sobol numbers, and the estimator's own
     /// random choices ([`PixelStream::rng`]).
-    independent: IndependentStream,
+    independent: IndependentStream<FastRng>,
     sobol: Option<SobolPoint>,
 }
 
@@ -161,7 +161,7 @@ impl PixelStream {
     /// The stream of `pixel`'s sample in pass `pass` of a render with seed `seed`: `rng` (the
     /// pass driver's per-pixel generator) alone for [`PixelSampler::Independent`] and for passes
     /// beyond [`SOBOL_PASSES`], else the pixel's scrambled Sobol point of that pass.
-    pub fn new(sampler: PixelSampler, seed: u64, pass: u64, pixel: usize, rng: ChainRng) -> Self {
+    pub fn new(sampler: PixelSampler, seed: u64, pass: u64, pixel: usize, rng: FastRng) -> Self {
         let sobol = (sampler == PixelSampler::Sobol && pass < SOBOL_PASSES).then(|| SobolPoint {
             pass_reversed: (pass as u32).reverse_bits(),
             pixel_seed: fold(seed ^ (pixel as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)),
@@ -175,7 +175,7 @@ impl PixelStream {
 
     /// The generator of the independent numbers, for the estimator's own random choices
     /// (shadow-ray roulette, the photon mapper's final gather).
-    pub fn rng(&mut self) -> &mut ChainRng {
+    pub fn rng(&mut self) -> &mut FastRng {
         &mut self.independent.rng
     }
 
@@ -195,7 +195,7 @@ impl PixelStream {
     }
 
     /// Independent numbers from `rng` (for estimators run outside the pass driver).
-    pub fn independent(rng: ChainRng) -> Self {
+    pub fn independent(rng: FastRng) -> Self {
         Self::new(PixelSampler::Independent, 0, 0, 0, rng)
     }
 }
@@ -227,7 +227,7 @@ impl SampleStream for PixelStream {
 mod tests {
     use super::*;
     use crate::sampler::{TECHNIQUE_STREAM, layout};
-    use mcmc_core::rng::stream;
+    use mcmc_core::rng::fast_stream;
 
     /// Every position of the layout up to the Sobol depth has its own set and lane (no two
     /// numbers of a sample share one); the positions after it have none.
@@ -276,7 +276,7 @@ mod tests {
     #[test]
     fn a_pixels_passes_stratify_its_film_position() {
         let film = |sampler, pass, pixel| {
-            let mut s = PixelStream::new(sampler, 7, pass, pixel, stream(7, pass));
+            let mut s = PixelStream::new(sampler, 7, pass, pixel, fast_stream(7, pass));
             s.start_stream(CAMERA_STREAM);
             s.next_2d()
         };
@@ -306,7 +306,7 @@ mod tests {
         let pairs = |stream_index, at| -> Vec<[f64; 2]> {
             (0..64)
                 .map(|i| {
-                    let mut s = PixelStream::new(PixelSampler::Sobol, 3, i, 11, stream(3, i));
+                    let mut s = PixelStream::new(PixelSampler::Sobol, 3, i, 11, fast_stream(3, i));
                     s.start_stream(stream_index);
                     s.seek(at);
                     s.next_2d()
@@ -324,7 +324,7 @@ mod tests {
         let single = |stream_index, at| {
             let mut cells = [0; 64];
             for i in 0..64 {
-                let mut s = PixelStream::new(PixelSampler::Sobol, 3, i, 11, stream(3, i));
+                let mut s = PixelStream::new(PixelSampler::Sobol, 3, i, 11, fast_stream(3, i));
                 s.start_stream(stream_index);
                 s.seek(at);
                 cells[(s.next_1d() * 64.0) as usize] += 1;
@@ -361,7 +361,7 @@ mod tests {
                     1 + (k % 3) as u64,
                     pass,
                     k,
-                    stream(9, k as u64),
+                    fast_stream(9, k as u64),
                 );
                 st.start_stream(s);
                 st.seek(p);
@@ -408,7 +408,7 @@ mod tests {
                         3,
                         (k % 9) as u64,
                         k,
-                        stream(3, k as u64),
+                        fast_stream(3, k as u64),
                     );
                     st.start_stream(s);
                     st.seek(p);
@@ -451,7 +451,7 @@ mod tests {
                     5,
                     (k % 7) as u64,
                     k,
-                    stream(5, k as u64),
+                    fast_stream(5, k as u64),
                 );
                 let (a, b) = (read(&mut s, sa, pa), read(&mut s, sb, pb));
                 assert_ne!(a, b);
@@ -477,8 +477,8 @@ mod tests {
             (PixelSampler::Sobol, SOBOL_PASSES),
             (PixelSampler::Independent, 3),
         ] {
-            let mut s = PixelStream::new(sampler, 1, pass, 5, stream(1, 2));
-            let mut rng = stream(1, 2);
+            let mut s = PixelStream::new(sampler, 1, pass, 5, fast_stream(1, 2));
+            let mut rng = fast_stream(1, 2);
             for _ in 0..10 {
                 assert_eq!(s.next_1d(), uniform(&mut rng));
             }
