@@ -1919,3 +1919,55 @@ fn pdf_pair_is_both_pdfs() {
         "only {nonzero} pairs with both densities nonzero"
     );
 }
+
+/// `Bsdf::eval_pdf_local` (each lobe evaluated once for value and density; glossy lobes share
+/// their half vector, `D(h)` and `Λ(wo)`) is `Bsdf::eval` and `Bsdf::pdf`, bit for bit, in both
+/// transport modes, on every configuration: random pairs on both sides and pairs the BSDF
+/// samples itself. `Bsdf::sample`'s value and density, computed the same way, are the two calls
+/// at the sampled direction.
+#[test]
+fn eval_pdf_local_is_eval_and_pdf() {
+    let mut rng = stream(109, 0);
+    let random_dir = |rng: &mut ChainRng| dir(1.0 - 2.0 * uniform(rng), 2.0 * PI * uniform(rng));
+    let (mut glossy_nonzero, mut sampled_checked) = (0, 0);
+    for case in cases() {
+        let b = &case.bsdf;
+        for k in 0..2000 {
+            let mode = if k % 4 < 2 {
+                TransportMode::Radiance
+            } else {
+                TransportMode::Importance
+            };
+            let wa = b.frame.to_world(random_dir(&mut rng));
+            let sampled = (k % 2 == 1)
+                .then(|| {
+                    let (ul, u) = u3(&mut rng);
+                    b.sample(wa, ul, u, mode)
+                })
+                .flatten();
+            let wb = sampled.map_or_else(|| b.frame.to_world(random_dir(&mut rng)), |s| s.wi);
+            let (f, pdf) = b
+                .local_pair(wa, wb)
+                .map_or((Rgb::BLACK, 0.0), |l| b.eval_pdf_local(l, mode));
+            let f_alone = b.eval(wa, wb, mode);
+            for c in 0..3 {
+                assert_eq!(f[c].to_bits(), f_alone[c].to_bits(), "{}", case.name);
+            }
+            assert_eq!(pdf.to_bits(), b.pdf(wa, wb).to_bits(), "{}", case.name);
+            if let Some(s) = sampled.filter(|s| !s.delta) {
+                for c in 0..3 {
+                    assert_eq!(s.f[c].to_bits(), f[c].to_bits(), "{}", case.name);
+                }
+                assert_eq!(s.pdf.to_bits(), pdf.to_bits(), "{}", case.name);
+                sampled_checked += 1;
+            }
+            let glossy = case.name.contains("conductor") || case.name.contains("layered");
+            glossy_nonzero += usize::from(glossy && pdf > 0.0 && !f.is_black());
+        }
+    }
+    assert!(
+        sampled_checked > 5_000,
+        "only {sampled_checked} samples checked"
+    );
+    assert!(glossy_nonzero > 1_000, "only {glossy_nonzero} glossy pairs");
+}

@@ -61,6 +61,28 @@ impl MicrofacetReflection {
         if p.is_finite() { p } else { 0.0 }
     }
 
+    /// `(f(wo, wi), pdf(wo, wi))`, bit for bit [`MicrofacetReflection::eval`] and
+    /// [`MicrofacetReflection::pdf`], with the half vector, `D(h)` and `Λ(wo)` computed once for
+    /// both (a sampled bounce, a next-event estimate and a path-space vertex need both).
+    pub fn eval_pdf(&self, wo: DVec3, wi: DVec3) -> (Rgb, f64) {
+        let (wo, wi) = to_upper(wo, wi);
+        let Some(h) = half(wo, wi) else {
+            return (Rgb::BLACK, 0.0);
+        };
+        let d = self.ggx.d(h);
+        let lambda_o = self.ggx.lambda(wo);
+        // `Ggx::g2` and `Ggx::g1` with `Λ(wo)` shared, in their order of operations.
+        let g2 = 1.0 / (1.0 + lambda_o + self.ggx.lambda(wi));
+        let s = d * g2 / (4.0 * wo.z * wi.z);
+        let f = if s.is_finite() {
+            self.fresnel.eval(wo.dot(h)) * self.tint * s
+        } else {
+            Rgb::BLACK
+        };
+        let p = 1.0 / (1.0 + lambda_o) * d / (4.0 * wo.z);
+        (f, if p.is_finite() { p } else { 0.0 })
+    }
+
     /// Reflect `wo` about a visible normal drawn from `u`.
     pub fn sample(&self, wo: DVec3, u: [f64; 2]) -> Option<LobeSample> {
         let flip = wo.z < 0.0;

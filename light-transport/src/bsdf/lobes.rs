@@ -162,6 +162,15 @@ impl LobeKind {
         }
     }
 
+    /// `(eval, pdf)` of a non-delta lobe, bit for bit the two calls (glossy lobes share their
+    /// microfacet terms: [`MicrofacetReflection::eval_pdf`]).
+    fn eval_pdf(&self, wo: DVec3, wi: DVec3, mode: TransportMode) -> (Rgb, f64) {
+        match self {
+            LobeKind::Glossy(g) => g.eval_pdf(wo, wi),
+            _ => (self.eval(wo, wi, mode), self.pdf(wo, wi)),
+        }
+    }
+
     fn pdf(&self, wo: DVec3, wi: DVec3) -> f64 {
         match self {
             LobeKind::Lambert(l) => l.pdf(wo, wi),
@@ -472,6 +481,30 @@ impl Lobes {
             }
         }
         t
+    }
+
+    /// [`Lobes::eval`] and [`Lobes::pdf_terms`] together, bit for bit, each lobe evaluated once
+    /// for both.
+    pub fn eval_pdf_terms(
+        &self,
+        p: &Probabilities,
+        wo: DVec3,
+        wi: DVec3,
+        mode: TransportMode,
+    ) -> (Rgb, Probabilities) {
+        let mut f = Rgb::BLACK;
+        let mut t = [0.0; MAX_LOBES];
+        for (j, l) in self.as_slice().iter().enumerate() {
+            if l.kind.is_delta() {
+                continue;
+            }
+            let (fj, pdf) = l.kind.eval_pdf(wo, wi, mode);
+            f += l.scale * fj;
+            if p[j] > 0.0 {
+                t[j] = p[j] * pdf;
+            }
+        }
+        (f, t)
     }
 
     /// Per-lobe `(scale_j f_j, P_j · branch probability)` of the delta lobes producing `wi`.

@@ -303,8 +303,8 @@ impl Bsdf {
             t.iter()
                 .fold((Rgb::BLACK, 0.0), |(f, q), (tf, tq)| (f + *tf, q + tq))
         } else {
-            let t = self.lobes.pdf_terms(&p, wo, wl);
-            (self.lobes.eval(wo, wl, mode), t.iter().sum())
+            let (f, t) = self.lobes.eval_pdf_terms(&p, wo, wl, mode);
+            (f, t.iter().sum())
         };
         if !positive(pdf) || !pdf.is_finite() || !f.is_finite() {
             return None;
@@ -346,6 +346,22 @@ impl Bsdf {
             .map(|&w| if w.is_finite() { w } else { 0.0 })
             .sum();
         if total.is_finite() { total } else { 0.0 }
+    }
+
+    /// `(`[`Bsdf::eval_local`]`, `[`Bsdf::pdf_local`]`)` of the pair, bit for bit, each lobe
+    /// evaluated once for both.
+    #[inline]
+    pub fn eval_pdf_local(&self, l: LocalPair, mode: TransportMode) -> (Rgb, f64) {
+        let p = self.lobes.probabilities(l.wo);
+        let (f, terms) = self.lobes.eval_pdf_terms(&p, l.wo, l.wi, mode);
+        let total: f64 = terms[..self.lobes.as_slice().len()]
+            .iter()
+            .map(|&w| if w.is_finite() { w } else { 0.0 })
+            .sum();
+        (
+            if f.is_finite() { f } else { Rgb::BLACK },
+            if total.is_finite() { total } else { 0.0 },
+        )
     }
 
     /// Evaluate the non-delta part.

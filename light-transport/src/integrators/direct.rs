@@ -65,16 +65,16 @@ pub fn next_event(
             )
         }
     };
-    // Value and (below) density from one change of frame.
-    let local = bsdf.local_pair(wo, wi);
-    let f = local.map_or(Rgb::BLACK, |l| bsdf.eval_local(l, TransportMode::Radiance));
+    // Value and density from one change of frame, each lobe evaluated once for both.
+    let (f, pdf_bsdf) = bsdf.local_pair(wo, wi).map_or((Rgb::BLACK, 0.0), |l| {
+        bsdf.eval_pdf_local(l, TransportMode::Radiance)
+    });
     if le.is_black() || f.is_black() || !pdf_solid.is_finite() || !(pdf_solid > 0.0) {
         return Rgb::BLACK;
     }
     let w = if delta {
         1.0
     } else {
-        let pdf_bsdf = local.map_or(0.0, |l| bsdf.pdf_local(l));
         mis(pdf_solid, bsdf_samples * pdf_bsdf, heuristic)
     };
     let value = f * le * (wi.dot(p.ns).abs() * w / pdf_solid);

@@ -357,11 +357,12 @@ pub fn walk<'a>(
                 None => return i + 1,
             }
         } else {
-            // Value and density from one change of frame.
-            let local = b.local_pair(wo, wi);
-            let f = local.map_or(Rgb::BLACK, |l| b.eval_local(l, mode));
+            // Value and density from one change of frame, each lobe evaluated once for both.
+            let (f, pdf) = b
+                .local_pair(wo, wi)
+                .map_or((Rgb::BLACK, 0.0), |l| b.eval_pdf_local(l, mode));
             out[i].f_next = f * shading;
-            (f, local.map_or(0.0, |l| b.pdf_local(l)))
+            (f, pdf)
         };
         if !(pdf > 0.0) {
             return i + 1;
