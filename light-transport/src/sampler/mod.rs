@@ -142,8 +142,9 @@ impl<S: SampleStream + ?Sized> SampleStream for &mut S {
 
 /// Fresh independent numbers from a generator: a [`ChainRng`] by default, or a
 /// [`FastRng`](mcmc_core::rng::FastRng) for a stream that lives for one path (a new-path
-/// proposal, a bootstrap sample). Positions are tracked (skipped numbers are simply not drawn),
-/// so the stream is a valid "replayable" source for statistics but not for replay.
+/// proposal, a bootstrap sample, a pass-based estimator's sample). Positions are tracked
+/// (skipped numbers are simply not drawn), so the stream is a valid "replayable" source for
+/// statistics but not for replay.
 #[derive(Clone, Debug)]
 pub struct IndependentStream<R = ChainRng> {
     /// The generator.
