@@ -502,7 +502,7 @@ impl Estimator for ErptWithoutMis {
             large_steps: None,
             tally: None,
         };
-        let mut rng = <ChainRng as rand::SeedableRng>::from_rng(stream.rng());
+        let mut rng = stream.chain_rng();
         for (state, _) in seeds {
             // Which strategy sampled it is lost in `seed_paths`: take the larger C*, which is
             // what a path tracer without MIS would see from its better technique.

@@ -340,7 +340,12 @@ impl Bsdf {
     #[inline]
     pub fn pdf_local(&self, l: LocalPair) -> f64 {
         let p = self.lobes.probabilities(l.wo);
-        let terms = self.lobes.pdf_terms(&p, l.wo, l.wi);
+        self.finite_total(&self.lobes.pdf_terms(&p, l.wo, l.wi))
+    }
+
+    /// The sum of the lobes' density terms, non-finite terms and totals counted as 0.
+    #[inline]
+    fn finite_total(&self, terms: &lobes::Probabilities) -> f64 {
         let total: f64 = terms[..self.lobes.as_slice().len()]
             .iter()
             .map(|&w| if w.is_finite() { w } else { 0.0 })
@@ -354,13 +359,9 @@ impl Bsdf {
     pub fn eval_pdf_local(&self, l: LocalPair, mode: TransportMode) -> (Rgb, f64) {
         let p = self.lobes.probabilities(l.wo);
         let (f, terms) = self.lobes.eval_pdf_terms(&p, l.wo, l.wi, mode);
-        let total: f64 = terms[..self.lobes.as_slice().len()]
-            .iter()
-            .map(|&w| if w.is_finite() { w } else { 0.0 })
-            .sum();
         (
             if f.is_finite() { f } else { Rgb::BLACK },
-            if total.is_finite() { total } else { 0.0 },
+            self.finite_total(&terms),
         )
     }
 

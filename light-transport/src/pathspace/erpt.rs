@@ -43,9 +43,8 @@ use crate::sampler::{IndependentStream, PixelStream, SampleStream};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use crate::{Error, Result};
-use mcmc_core::rng::{ChainRng, uniform, uniform_index};
+use mcmc_core::rng::{uniform, uniform_index};
 use mcmc_core::{Chain, Stats};
-use rand::SeedableRng;
 use std::sync::Mutex;
 
 /// ERPT settings.
@@ -298,8 +297,7 @@ impl Estimator for Erpt {
         else {
             return Rgb::BLACK;
         };
-        // The chains' generator, keyed from the pixel's numbers (chains draw from a `ChainRng`).
-        let mut rng = ChainRng::from_rng(stream.rng());
+        let mut rng = stream.chain_rng();
         let mut stats = Stats::default();
         let (mut chains, mut capped) = (0, 0);
         let max = self.settings.max_chains;

@@ -28,8 +28,7 @@ use crate::path::{MisHeuristic, camera_ray};
 use crate::sampler::PixelStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
-use mcmc_core::rng::FastRng;
-use mcmc_core::rng::uniform;
+use mcmc_core::rng::{FastRng, uniform};
 
 /// Settings of photon mapping.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -34,9 +34,9 @@ use super::{
     CAMERA_BLOCK, CAMERA_STREAM, IndependentStream, LIGHT_BLOCK, LIGHT_STREAM, STREAMS,
     SampleStream, VERTEX_BLOCK,
 };
-use mcmc_core::rng::FastRng;
-use mcmc_core::rng::uniform;
-use rand::Rng;
+use mcmc_core::ChainRng;
+use mcmc_core::rng::{FastRng, uniform};
+use rand::{Rng, SeedableRng};
 
 /// How the pass-based estimators draw the numbers of a sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -177,6 +177,12 @@ impl PixelStream {
     /// (shadow-ray roulette, the photon mapper's final gather).
     pub fn rng(&mut self) -> &mut FastRng {
         &mut self.independent.rng
+    }
+
+    /// A [`ChainRng`] keyed from this sample's generator, for an estimator that runs Metropolis
+    /// chains from its sample (ERPT): the kernels draw from a `ChainRng`.
+    pub fn chain_rng(&mut self) -> ChainRng {
+        ChainRng::from_rng(&mut self.independent.rng)
     }
 
     /// The Sobol number at position `p` of the current substream (below its
