@@ -65,11 +65,15 @@ pub fn next_event(
             )
         }
     };
+    // A sample that carries nothing (the point behind the light) needs no BSDF evaluation.
+    if le.is_black() || !pdf_solid.is_finite() || !(pdf_solid > 0.0) {
+        return Rgb::BLACK;
+    }
     // Value and density from one change of frame, each lobe evaluated once for both.
     let (f, pdf_bsdf) = bsdf.local_pair(wo, wi).map_or((Rgb::BLACK, 0.0), |l| {
         bsdf.eval_pdf_local(l, TransportMode::Radiance)
     });
-    if le.is_black() || f.is_black() || !pdf_solid.is_finite() || !(pdf_solid > 0.0) {
+    if f.is_black() {
         return Rgb::BLACK;
     }
     let w = if delta {

@@ -151,6 +151,12 @@ pub fn join(
     } else {
         f_light()
     };
+    // A light end that sends nothing toward the camera end (the camera end behind its surface,
+    // or outside its emission) makes the contribution zero: the camera end's factor, often a
+    // BSDF evaluation, is not needed.
+    if fq.is_black() {
+        return None;
+    }
     if before_camera.is_none() {
         let w = (qs.p() - pt.p()).normalize_or_zero();
         let (we, _, raster) = scene.camera.importance(pt.p(), w);
