@@ -265,6 +265,11 @@ pub enum Compact {
     Pairs,
 }
 
+/// How far behind a segment's origin its traversal ray starts: twice obvhs's smallest entry
+/// distance (`EPSILON`, 10⁻⁴, private to obvhs), so that boxes at the origin lie beyond it
+/// whatever the f32 rounding of the shifted origin (the boxes' padding covers that).
+const TRAVERSAL_BACKOFF: f64 = 2e-4;
+
 /// Flag of a reference (in `Topology`) that stands for two primitives.
 const PAIRED: u32 = 1 << 31;
 
@@ -508,16 +513,33 @@ impl Bvh {
         }
     }
 
+    /// The f32 ray that traverses the BVH for the segment `o + t d`, `t ∈ (0, t_max)`: started
+    /// [`TRAVERSAL_BACKOFF`] behind `o`, since obvhs's node test enters no box closer than
+    /// `10⁻⁴` along the ray (its `EPSILON`), which lost primitives within that distance of the
+    /// origin: a shadow ray leaving a floor `5·10⁻⁵` from a wall, toward the wall, went through
+    /// it (`door`'s back corner). The primitive tests take the f64 segment itself.
     fn bvh_ray(o: DVec3, d: DVec3, t_max: f64) -> BvhRay {
         let tmax = if t_max.is_finite() {
-            (t_max * (1.0 + 1e-6)) as f32
+            Self::traversal_distance(t_max)
         } else {
             f32::INFINITY
         };
         // `+ 0.0` turns negative zeros into positive ones: obvhs's traversal misses flat nodes
         // for directions with a −0.0 component (e.g. `−n` of an axis-aligned normal), which it
         // hits with +0.0.
-        BvhRay::new(to_f32(o), to_f32(d + DVec3::ZERO), 0.0, tmax)
+        BvhRay::new(
+            to_f32(o - d * TRAVERSAL_BACKOFF),
+            to_f32(d + DVec3::ZERO),
+            0.0,
+            tmax,
+        )
+    }
+
+    /// The distance along [`Bvh::bvh_ray`] of the point at `t` on the segment, slightly larger, so
+    /// that traversal never culls a box whose f32 entry distance rounds above it.
+    #[inline]
+    fn traversal_distance(t: f64) -> f32 {
+        ((t + TRAVERSAL_BACKOFF) * (1.0 + 1e-6)) as f32
     }
 
     /// The closest hit of the ray `o + t d`, `t ∈ (0, t_max)`.
@@ -581,9 +603,7 @@ impl Bvh {
                     if let Some(h) = primitive.intersect_t(o, d, best_t) {
                         best_t = h.0;
                         best = Some((h, index));
-                        // A slightly larger f32 distance, so traversal never culls a box whose
-                        // f32 entry distance rounds above the f64 hit.
-                        ray.tmax = ray.tmax.min((h.0 * (1.0 + 1e-6)) as f32);
+                        ray.tmax = ray.tmax.min(Self::traversal_distance(h.0));
                     }
                     false
                 });
@@ -899,6 +919,85 @@ mod tests {
         };
         assert!(references > prims.len() + 100, "{references} references");
         agrees_on_random_rays(&prims, &bvh, 4000, &mut r, 12.0);
+    }
+
+    /// Primitives closer to a segment's origin than obvhs's smallest box entry distance (10⁻⁴)
+    /// are found, by closest hit and occlusion, on the portable and the v3 path: a room's floor
+    /// and back wall (two triangles each, among other geometry so the BVH has depth), and
+    /// segments leaving the floor at distances `δ` from the wall, toward it. Without
+    /// [`TRAVERSAL_BACKOFF`] every segment with `δ` below about 10⁻⁴ went through the wall.
+    #[test]
+    fn primitives_at_the_origin_are_found() {
+        let quad = |a: DVec3, b: DVec3, c: DVec3, d: DVec3| {
+            [[a, b, c], [a, c, d]].map(|p| {
+                Primitive::Triangle(Triangle {
+                    p,
+                    uv: [[0.0; 2]; 3],
+                    flip: false,
+                    shading: NO_SHADING,
+                })
+            })
+        };
+        let (x0, x1) = (-2.0, 2.0);
+        let mut prims = Vec::new();
+        // Floor y = 0 and back wall z = −2.
+        prims.extend(quad(
+            DVec3::new(x0, 0.0, -2.0),
+            DVec3::new(x1, 0.0, -2.0),
+            DVec3::new(x1, 0.0, 2.0),
+            DVec3::new(x0, 0.0, 2.0),
+        ));
+        prims.extend(quad(
+            DVec3::new(x0, 0.0, -2.0),
+            DVec3::new(x0, 3.0, -2.0),
+            DVec3::new(x1, 3.0, -2.0),
+            DVec3::new(x1, 0.0, -2.0),
+        ));
+        let mut rng = stream(12, 0);
+        let mut r = || uniform(&mut rng);
+        for _ in 0..60 {
+            let c = DVec3::new(r() * 4.0 - 2.0, r() * 3.0, r() * 4.0 - 2.0);
+            prims.extend(quad(
+                c,
+                c + DVec3::X * 0.1,
+                c + DVec3::new(0.1, 0.1, 0.0),
+                c + DVec3::Y * 0.1,
+            ));
+        }
+        let bvh = Bvh::new(prims.clone());
+        let mut tested = 0;
+        for delta in [3e-5, 5e-5, 9e-5, 2e-4, 1e-3] {
+            for k in 0..20 {
+                let o = DVec3::new(-1.9 + 0.18 * k as f64, 2e-9, -2.0 + delta);
+                let d = DVec3::new(0.1, 0.7, -0.7).normalize();
+                let brute = prims
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, p)| p.intersect(o, d, f64::INFINITY, i as u32))
+                    .min_by(|a, b| a.t.total_cmp(&b.t))
+                    .expect("the wall");
+                assert!(brute.t < 2.0 * delta, "the wall is first");
+                let hit = bvh.closest_hit(o, d, f64::INFINITY).expect("a hit");
+                assert_eq!(hit.t, brute.t, "delta {delta}, o {o}");
+                assert!(
+                    bvh.occluded_in::<false>(o, d, 1.0).is_some(),
+                    "delta {delta}"
+                );
+                #[cfg(target_arch = "x86_64")]
+                if cpu::cpu_has_v3() {
+                    // SAFETY: the CPU has the v3 features.
+                    unsafe {
+                        assert!(bvh.occluded_v3(o, d, 1.0).is_some(), "delta {delta}");
+                        assert_eq!(
+                            bvh.closest_hit_v3(o, d, f64::INFINITY).map(|h| h.t),
+                            Some(brute.t)
+                        );
+                    }
+                }
+                tested += 1;
+            }
+        }
+        assert_eq!(tested, 100);
     }
 
     /// The derivatives the BVH computes on demand for a hit are its primitive's at the hit's
