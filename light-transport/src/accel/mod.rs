@@ -11,6 +11,7 @@ use glam::Vec3A;
 mod convert;
 #[cfg(target_arch = "x86_64")]
 mod cpu;
+mod occluders;
 mod split;
 
 use obvhs::BvhBuildParams;
@@ -186,9 +187,6 @@ fn permute<T>(items: &mut [T], order: &[u32]) {
 
 thread_local! {
     static RAYS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
-    /// The primitive that blocked this thread's last occlusion query that traversal answered
-    /// (see [`Bvh::occluded`]).
-    static LAST_OCCLUDER: std::cell::Cell<u32> = const { std::cell::Cell::new(u32::MAX) };
     /// Frames of the triangles this thread hit last (see [`Bvh::frame`]); a key of `u64::MAX` is
     /// an empty slot (no BVH has the id `u32::MAX` and a primitive of that index).
     static FRAMES: std::cell::RefCell<[(u64, TriangleFrame); FRAME_SLOTS]> =
@@ -661,38 +659,35 @@ impl Bvh {
 
     /// Whether anything blocks the open segment `o + t d`, `t ∈ (0, t_max)`.
     ///
-    /// The primitive that blocked this thread's last segment is tested first, before any
-    /// traversal (a shadow cache, Haines & Greenberg 1986): successive shadow rays from one vertex
-    /// or towards one light are often blocked by the same triangle. The answer is exact either
-    /// way: a primitive that blocks the segment is the proof that it is blocked, and which one
-    /// does is never reported, so images do not depend on the cache, nor on the thread count.
-    /// (Any index of this BVH will do, so the cache needs no reset between scenes.)
+    /// The primitives that blocked this thread's latest segments are tested first, before any
+    /// traversal (a shadow cache, Haines & Greenberg 1986, see [`occluders`]): successive shadow
+    /// rays from one vertex or towards one light are often blocked by the same triangles. The
+    /// answer is exact either way: a primitive that blocks the segment is the proof that it is
+    /// blocked, and traversal finds a blocker whenever one exists ([`TRAVERSAL_BACKOFF`]), so
+    /// images do not depend on the cache, nor on the thread count. (Any index of this BVH will
+    /// do, so the cache needs no reset between scenes.)
     pub fn occluded(&self, o: DVec3, d: DVec3, t_max: f64) -> bool {
         count_ray();
         if self.primitives.is_empty() {
             return false;
         }
-        let last = LAST_OCCLUDER.with(|c| c.get());
-        if self
-            .primitives
-            .get(last as usize)
-            .is_some_and(|p| p.hits(o, d, t_max))
-        {
-            return true;
-        }
+        occluders::occluded(
+            |i| self.primitives.get(i as usize).map(|p| p.hits(o, d, t_max)),
+            || self.traverse_occluded(o, d, t_max),
+        )
+        .is_some()
+    }
+
+    /// The blocker [`Bvh::occluded`] finds by traversal, if any: the copy of the query for this
+    /// CPU.
+    #[inline]
+    fn traverse_occluded(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<u32> {
         #[cfg(target_arch = "x86_64")]
-        let blocker = if cpu::has_v3() {
+        if cpu::has_v3() {
             // SAFETY: the CPU has every feature `occluded_v3` is compiled for.
-            unsafe { self.occluded_v3(o, d, t_max) }
-        } else {
-            self.occluded_in::<false>(o, d, t_max)
-        };
-        #[cfg(not(target_arch = "x86_64"))]
-        let blocker = self.occluded_in::<false>(o, d, t_max);
-        if let Some(index) = blocker {
-            LAST_OCCLUDER.with(|c| c.set(index));
+            return unsafe { self.occluded_v3(o, d, t_max) };
         }
-        blocker.is_some()
+        self.occluded_in::<false>(o, d, t_max)
     }
 
     /// [`Bvh::occluded`] compiled for x86-64-v3, with the AVX2 node test (see [`cpu`]).
@@ -1121,11 +1116,11 @@ mod tests {
         }
     }
 
-    /// Occlusion with the last occluder tested first agrees with brute force, on bundles of
-    /// segments from one origin in nearby directions and of random lengths, so that the cached
-    /// primitive blocks many of them (which the test counts) and lies beyond the end of others.
+    /// Occlusion with the recent occluders tested first agrees with brute force, on bundles of
+    /// segments from one origin in nearby directions and of random lengths, so that the kept
+    /// primitives block many of them (which the test counts) and lie beyond the end of others.
     #[test]
-    fn the_last_occluder_answers_exactly() {
+    fn recent_occluders_answer_exactly() {
         let mut rng = stream(9, 0);
         let mut r = || uniform(&mut rng);
         let prims = grid_slivers_and_spheres(16, &mut r);
@@ -1137,11 +1132,11 @@ mod tests {
             for _ in 0..8 {
                 let d = (axis + (DVec3::new(r(), r(), r()) - DVec3::splat(0.5)) * 0.05).normalize();
                 let t = 20.0 * r();
-                let cached = LAST_OCCLUDER.with(|c| c.get());
-                by_cache += bvh
-                    .primitives
-                    .get(cached as usize)
-                    .is_some_and(|p| p.hits(o, d, t)) as usize;
+                by_cache += occluders::kept().iter().any(|&i| {
+                    bvh.primitives
+                        .get(i as usize)
+                        .is_some_and(|p| p.hits(o, d, t))
+                }) as usize;
                 let brute = prims.iter().any(|p| p.hits(o, d, t));
                 blocked += brute as usize;
                 assert_eq!(bvh.occluded(o, d, t), brute, "o {o} d {d} t {t}");
