@@ -1,7 +1,9 @@
 //! The bounding volume hierarchy: obvhs' compressed wide BVH (CWBVH, built with PLOC) over
-//! triangles and spheres. Traversal runs in f32 on boxes padded by a relative epsilon so rounding
-//! cannot lose a hit; primitives are intersected in f64 and the closest f64 hit is kept. Triangles
-//! whose bounding box is mostly empty enter the BVH as several references (`split`).
+//! triangles and spheres. Traversal runs in f32 on boxes padded by a relative epsilon, from a
+//! point a little behind the ray's origin, so that neither rounding nor obvhs's smallest entry
+//! distance can lose a hit; primitives are intersected in f64 and the closest f64 hit is kept.
+//! Triangles whose bounding box is mostly empty enter the BVH as several references (`split`).
+//! Occlusion queries first test the thread's recent occluders (`occluders`).
 
 use crate::geometry::{
     Derivatives, Hit, Sphere, SurfacePoint, Triangle, TriangleFrame, TriangleShading,
