@@ -662,10 +662,10 @@ impl Bvh {
     /// Whether anything blocks the open segment `o + t d`, `t ∈ (0, t_max)`.
     ///
     /// The primitives that blocked this thread's latest segments are tested first, before any
-    /// traversal (a shadow cache, Haines & Greenberg 1986, see [`occluders`]): successive shadow
+    /// traversal (a shadow cache, Haines & Greenberg 1986; module `occluders`): successive shadow
     /// rays from one vertex or towards one light are often blocked by the same triangles. The
     /// answer is exact either way: a primitive that blocks the segment is the proof that it is
-    /// blocked, and traversal finds a blocker whenever one exists ([`TRAVERSAL_BACKOFF`]), so
+    /// blocked, and traversal finds a blocker whenever one exists (`TRAVERSAL_BACKOFF`), so
     /// images do not depend on the cache, nor on the thread count. (Any index of this BVH will
     /// do, so the cache needs no reset between scenes.)
     pub fn occluded(&self, o: DVec3, d: DVec3, t_max: f64) -> bool {
