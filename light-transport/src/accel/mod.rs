@@ -677,7 +677,6 @@ impl Bvh {
             |i| self.primitives.get(i as usize).map(|p| p.hits(o, d, t_max)),
             || self.traverse_occluded(o, d, t_max),
         )
-        .is_some()
     }
 
     /// The blocker [`Bvh::occluded`] finds by traversal, if any: the copy of the query for this

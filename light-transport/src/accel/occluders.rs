@@ -53,12 +53,6 @@ pub struct RecentOccluders {
     older_blocked: u32,
 }
 
-impl Default for RecentOccluders {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
 impl RecentOccluders {
     /// No occluders yet; the first window probes.
     pub const fn new() -> Self {
@@ -184,14 +178,14 @@ thread_local! {
 pub fn occluded(
     blocks: impl Fn(u32) -> Option<bool>,
     traverse: impl FnOnce() -> Option<u32>,
-) -> Option<u32> {
+) -> bool {
     OCCLUDERS.with_borrow_mut(|r| {
         if r.blocked(blocks) {
-            return Some(r.slots[0]);
+            return true;
         }
         let blocker = traverse();
         r.traversed(blocker);
-        blocker
+        blocker.is_some()
     })
 }
 
