@@ -7,7 +7,7 @@
 //! `W_e(ω) = 1 / (A · A_lens · cos⁴θ)`, `p_pos = 1/A_lens`, `p_dir(ω) = 1 / (A cos³θ)`, so that the
 //! measurement of the whole film is 1 and a pixel's value is `W·H` times its share.
 
-use crate::geometry::Ray;
+use crate::geometry::{NO_PRIMITIVE, Ray};
 use crate::math::{DMat4, DVec3};
 use crate::scene::{CameraDesc, Projection};
 use crate::{Error, Result};
@@ -129,7 +129,7 @@ impl Camera {
 
     /// The surface point of a lens position `p` (normal: the viewing direction).
     pub fn lens_point(&self, p: DVec3) -> crate::geometry::SurfacePoint {
-        crate::geometry::SurfacePoint::flat(p, self.forward(), u32::MAX)
+        crate::geometry::SurfacePoint::flat(p, self.forward(), NO_PRIMITIVE)
     }
 
     fn image_area(&self) -> f64 {

@@ -9,8 +9,8 @@
 //! rescales it.
 
 use crate::accel::{Bvh, Primitive};
-use crate::geometry::SurfacePoint;
 use crate::geometry::Triangle;
+use crate::geometry::{NO_PRIMITIVE, SurfacePoint};
 use crate::math::{DVec3, Frame, clamp_unit};
 use crate::spectrum::Rgb;
 use std::f64::consts::PI;
@@ -110,7 +110,7 @@ impl LightKind {
                 Some((p, 1.0 / area))
             }
             LightKind::Point { position, .. } => {
-                Some((SurfacePoint::flat(position, DVec3::Z, u32::MAX), 1.0))
+                Some((SurfacePoint::flat(position, DVec3::Z, NO_PRIMITIVE), 1.0))
             }
         }
     }
@@ -160,7 +160,7 @@ impl LightKind {
                 intensity,
             } => {
                 let (w, pdf_dir) = self.sample_direction(DVec3::Z, u_dir)?;
-                let point = SurfacePoint::flat(position, w, u32::MAX);
+                let point = SurfacePoint::flat(position, w, NO_PRIMITIVE);
                 Some(EmissionSample {
                     point,
                     w,

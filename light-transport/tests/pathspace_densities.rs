@@ -53,7 +53,7 @@ mod common;
 use common::vmf_pdf;
 use light_transport::Rgb;
 use light_transport::bsdf::TransportMode;
-use light_transport::geometry::Ray;
+use light_transport::geometry::{Ray, SurfaceEnd};
 use light_transport::math::DVec3;
 use light_transport::metropolis::ImportanceKind;
 use light_transport::path::{Vertex, VertexKind};
@@ -353,8 +353,8 @@ fn geometry(f: &Fixture, a: &Vertex, b: &Vertex) -> f64 {
 }
 
 fn clear(f: &Fixture, a: &Vertex, b: &Vertex) -> bool {
-    let na = (!is_lens(a)).then(|| a.n());
-    let nb = (!is_lens(b)).then(|| b.n());
+    let na = (!is_lens(a)).then(|| SurfaceEnd::of(&a.point));
+    let nb = (!is_lens(b)).then(|| SurfaceEnd::of(&b.point));
     f.scene.visible(a.p(), na, b.p(), nb)
 }
 

@@ -5,11 +5,15 @@ mod ray;
 mod sphere;
 mod triangle;
 
-pub use ray::{Ray, offset_origin};
+pub use ray::{Ray, SurfaceEnd, offset_origin};
 pub use sphere::Sphere;
 pub use triangle::{NO_SHADING, Triangle, TriangleFrame, TriangleShading};
 
 use crate::math::DVec3;
+
+/// The primitive index of points on no primitive ([`SurfacePoint::flat`]'s lens and point-light
+/// points) and of rays that leave none ([`Ray::new`]).
+pub const NO_PRIMITIVE: u32 = u32::MAX;
 
 /// A point on a surface found by a ray or by sampling.
 ///

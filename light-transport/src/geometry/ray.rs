@@ -1,5 +1,6 @@
 //! Rays and robust ray origins.
 
+use super::{NO_PRIMITIVE, SurfacePoint};
 use crate::math::DVec3;
 
 /// A ray `o + t d`, `t ∈ (0, t_max)`.
@@ -11,6 +12,9 @@ pub struct Ray {
     pub d: DVec3,
     /// Upper bound of the parameter.
     pub t_max: f64,
+    /// The primitive the ray leaves ([`Ray::leaving`]), which cannot hit it if it is a triangle;
+    /// [`NO_PRIMITIVE`] for a ray that leaves none.
+    pub leaves: u32,
 }
 
 impl Ray {
@@ -20,6 +24,19 @@ impl Ray {
             o,
             d,
             t_max: f64::INFINITY,
+            leaves: NO_PRIMITIVE,
+        }
+    }
+
+    /// The unbounded ray leaving the surface at `point` in direction `w`: its origin offset along
+    /// the geometric normal to the side `w` points to ([`offset_origin`]). The ray starts off the
+    /// plane of the point's triangle and moves away from it (or along it), so it cannot hit that
+    /// triangle, and the BVH skips its test ([`SurfaceEnd`]).
+    #[inline]
+    pub fn leaving(point: &SurfacePoint, w: DVec3) -> Self {
+        Self {
+            leaves: point.primitive,
+            ..Self::new(offset_origin(point.p, point.n, w), w)
         }
     }
 
@@ -40,5 +57,29 @@ pub fn offset_origin(p: DVec3, n: DVec3, w: DVec3) -> DVec3 {
         p + n * eps
     } else {
         p - n * eps
+    }
+}
+
+/// One end of a segment on a surface (`Scene::visible`): the geometric normal the end is offset
+/// along, toward the other end, and the primitive it lies on. A segment whose ends are offset so
+/// lies on one side of each end's triangle's plane (unless the other end lies within the offset
+/// of that plane, where the geometry term of the segment vanishes to the same order), so neither
+/// end's triangle needs testing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceEnd {
+    /// Unit geometric normal.
+    pub n: DVec3,
+    /// The primitive the end lies on.
+    pub primitive: u32,
+}
+
+impl SurfaceEnd {
+    /// The end at `point`.
+    #[inline]
+    pub fn of(point: &SurfacePoint) -> Self {
+        Self {
+            n: point.n,
+            primitive: point.primitive,
+        }
     }
 }

@@ -3,7 +3,7 @@
 //! by path tracing, the direct-lighting pass and the photon mapper's final gather.
 
 use crate::bsdf::{Bsdf, TransportMode};
-use crate::geometry::{Hit, SurfacePoint};
+use crate::geometry::{Hit, SurfaceEnd, SurfacePoint};
 use crate::light::LightKind;
 use crate::math::DVec3;
 use crate::path::MisHeuristic;
@@ -88,8 +88,11 @@ pub fn next_event(
     let Some(boost) = survive(value) else {
         return Rgb::BLACK;
     };
-    let light_normal = if delta { None } else { Some(ln) };
-    if !scene.visible(p.p, Some(p.n), lp, light_normal) {
+    let light_end = match *light {
+        LightKind::Area { primitive, .. } => Some(SurfaceEnd { n: ln, primitive }),
+        LightKind::Point { .. } => None,
+    };
+    if !scene.visible(p.p, Some(SurfaceEnd::of(p)), lp, light_end) {
         return Rgb::BLACK;
     }
     value * boost

@@ -12,7 +12,7 @@
 use super::direct::{emitted, next_event};
 use super::{Estimator, Splat};
 use crate::bsdf::TransportMode;
-use crate::geometry::{Ray, offset_origin};
+use crate::geometry::Ray;
 use crate::path::{MisHeuristic, camera_ray};
 use crate::sampler::{CAMERA_STREAM, PixelStream, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
@@ -60,7 +60,7 @@ impl Estimator for DirectLighting {
                     continue;
                 };
                 // The lobe's probability times its sample's weight `f |cos| / probability`.
-                let ray = Ray::new(offset_origin(p.p, p.n, s.wi), s.wi);
+                let ray = Ray::leaving(p, s.wi);
                 if let Some(next) = scene.intersect(&ray) {
                     let le = emitted(scene, &next, -s.wi, None, self.heuristic);
                     l += s.f * le * s.wi.dot(p.ns).abs();
@@ -94,7 +94,7 @@ impl Estimator for DirectLighting {
         if bs.pdf == 0.0 || bs.f.is_black() {
             return l;
         }
-        let ray = Ray::new(offset_origin(p.p, p.n, bs.wi), bs.wi);
+        let ray = Ray::leaving(p, bs.wi);
         if let Some(next) = scene.intersect(&ray) {
             let le = emitted(
                 scene,

@@ -8,7 +8,7 @@ use super::direct::{emitted, next_event};
 use super::shadow_roulette::ShadowRoulette;
 use super::{Estimator, Splat};
 use crate::bsdf::TransportMode;
-use crate::geometry::{Ray, offset_origin};
+use crate::geometry::Ray;
 use crate::path::{MisHeuristic, Roulette, camera_ray};
 use crate::sampler::{CAMERA_STREAM, PixelStream, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
@@ -144,7 +144,7 @@ impl Estimator for PathTracer {
             if !beta.is_finite() {
                 break;
             }
-            ray = Ray::new(offset_origin(p.p, p.n, bs.wi), bs.wi);
+            ray = Ray::leaving(p, bs.wi);
         }
         l
     }

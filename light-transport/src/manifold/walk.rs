@@ -15,7 +15,7 @@
 use super::Vec2;
 use super::chain::{ChainVertex, Interaction, scatter};
 use super::geometry_term::{chain_jacobian, coordinates};
-use crate::geometry::{Ray, offset_origin};
+use crate::geometry::{Ray, SurfaceEnd};
 use crate::math::{DVec3, Frame};
 use crate::scene::Scene;
 
@@ -195,25 +195,25 @@ type Expected = (Option<u32>, Interaction, [f64; 2]);
 fn follow(
     scene: &Scene,
     start: &ChainVertex,
-    mut dir: DVec3,
+    dir: DVec3,
     expected: impl Iterator<Item = Expected>,
     out: &mut Vec<ChainVertex>,
-) -> Result<(DVec3, DVec3), WalkFailure> {
-    let mut origin = if start.material == NO_MATERIAL {
-        start.p()
+) -> Result<Ray, WalkFailure> {
+    let mut ray = if start.material == NO_MATERIAL {
+        Ray::new(start.p(), dir)
     } else {
-        offset_origin(start.p(), start.point.n, dir)
+        Ray::leaving(&start.point, dir)
     };
     for (want, interaction, offset) in expected {
         let hit = scene
-            .intersect(&Ray::new(origin, dir))
+            .intersect(&ray)
             .ok_or(WalkFailure::ChangedConfiguration)?;
         let material = scene.primitive_material[hit.point.primitive as usize];
         if want.is_some_and(|m| m != material) {
             return Err(WalkFailure::ChangedConfiguration);
         }
         let v = ChainVertex::new(scene, hit.point, material, interaction, offset);
-        let wi = -dir;
+        let wi = -ray.d;
         let h = v.half_vector(wi).ok_or(WalkFailure::ChangedConfiguration)?;
         let eta = v.relative_eta(wi);
         let refract = matches!(v.interaction, Interaction::Refract { .. });
@@ -223,11 +223,10 @@ fn follow(
         }
         let wo =
             scatter(wi, h, eta, refract, v.point.n).ok_or(WalkFailure::ChangedConfiguration)?;
-        origin = offset_origin(v.p(), v.point.n, wo);
-        dir = wo;
+        ray = Ray::leaving(&v.point, wo);
         out.push(v);
     }
-    Ok((origin, dir))
+    Ok(ray)
 }
 
 /// Trace from `chain[0]` through the point `through`, repeating the chain's interactions at each
@@ -248,12 +247,12 @@ fn propagate(
     let expected = chain[1..=m]
         .iter()
         .map(|v| (Some(v.material), v.interaction, v.offset));
-    let (origin, dir) = follow(scene, &chain[0], dir, expected, &mut out)?;
-    let t = (x_plane - origin).dot(n_plane) / dir.dot(n_plane);
+    let ray = follow(scene, &chain[0], dir, expected, &mut out)?;
+    let t = (x_plane - ray.o).dot(n_plane) / ray.d.dot(n_plane);
     if !(t > 0.0 && t.is_finite()) {
         return Err(WalkFailure::ChangedConfiguration);
     }
-    Ok((out, origin + dir * t))
+    Ok((out, ray.at(t)))
 }
 
 /// A chain traced from `start` along `dir` through specular vertices that scatter as
@@ -268,9 +267,9 @@ pub fn trace_chain(
 ) -> Result<Vec<ChainVertex>, WalkFailure> {
     let mut out = vec![*start];
     let expected = interactions.iter().map(|&i| (None, i, [0.0; 2]));
-    let (origin, dir) = follow(scene, start, dir, expected, &mut out)?;
+    let ray = follow(scene, start, dir, expected, &mut out)?;
     let hit = scene
-        .intersect(&Ray::new(origin, dir))
+        .intersect(&ray)
         .ok_or(WalkFailure::ChangedConfiguration)?;
     out.push(ChainVertex::new(
         scene,
@@ -374,8 +373,13 @@ pub fn walk_manifold(
         }
     }
     let last = &cur[m];
-    let target_n = (target.material != NO_MATERIAL).then_some(target.point.n);
-    if !scene.visible(last.p(), Some(last.point.n), target.p(), target_n) {
+    let target_end = (target.material != NO_MATERIAL).then(|| SurfaceEnd::of(&target.point));
+    if !scene.visible(
+        last.p(),
+        Some(SurfaceEnd::of(&last.point)),
+        target.p(),
+        target_end,
+    ) {
         return Err(WalkFailure::Occluded);
     }
     cur[n - 1] = *target;

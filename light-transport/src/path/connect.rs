@@ -6,6 +6,7 @@
 
 use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
+use crate::geometry::SurfaceEnd;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
@@ -65,12 +66,7 @@ pub fn connect(
 /// Whether the edge between vertices `a` and `b` is unoccluded (ray origins offset along the
 /// normals of the vertices that lie on surfaces).
 pub fn unoccluded(scene: &Scene, a: &Vertex, b: &Vertex) -> bool {
-    scene.visible(
-        a.p(),
-        surface_normal(scene, a),
-        b.p(),
-        surface_normal(scene, b),
-    )
+    scene.visible(a.p(), surface_end(scene, a), b.p(), surface_end(scene, b))
 }
 
 /// [`connect`] without the visibility test, for paths whose connecting edge is known to be
@@ -175,6 +171,7 @@ pub fn join(
     })
 }
 
-fn surface_normal(scene: &Scene, v: &Vertex) -> Option<crate::math::DVec3> {
-    v.on_surface(scene).then(|| v.n())
+/// The vertex as a segment end on a surface, if it lies on one.
+fn surface_end(scene: &Scene, v: &Vertex) -> Option<SurfaceEnd> {
+    v.on_surface(scene).then(|| SurfaceEnd::of(&v.point))
 }

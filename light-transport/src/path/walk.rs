@@ -8,7 +8,7 @@ use super::subpath::Subpath;
 use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
 use crate::camera::CameraSample;
-use crate::geometry::{Ray, offset_origin};
+use crate::geometry::Ray;
 use crate::sampler::{
     CAMERA_BLOCK, CAMERA_STREAM, LIGHT_BLOCK, LIGHT_STREAM, SampleStream, layout,
 };
@@ -233,14 +233,14 @@ pub fn light_subpath_with<S: SampleStream>(
         es.point.n.dot(es.w).abs()
     };
     let beta = es.le * (cos / (pdf_origin * es.pdf_dir));
-    let o = if es.delta_pos {
-        es.point.p
+    let ray = if es.delta_pos {
+        Ray::new(es.point.p, es.w)
     } else {
-        offset_origin(es.point.p, es.point.n, es.w)
+        Ray::leaving(&es.point, es.w)
     };
     random_walk(
         scene,
-        Ray::new(o, es.w),
+        ray,
         beta,
         es.pdf_dir,
         max_vertices,
@@ -363,7 +363,7 @@ fn random_walk<S: SampleStream>(
         };
         pdf_dir = pdf_fwd;
         let rev = vert.to_area(pdf_rev, &path[prev], scene);
-        ray = Ray::new(offset_origin(vert.p(), n, bs.wi), bs.wi);
+        ray = Ray::leaving(&vert.point, bs.wi);
         path[b].delta = bs.delta;
         path[prev].pdf_rev = rev;
     }

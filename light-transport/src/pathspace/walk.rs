@@ -9,7 +9,7 @@
 
 use super::state::PathState;
 use crate::bsdf::TransportMode;
-use crate::geometry::{Ray, SurfacePoint, offset_origin};
+use crate::geometry::{Ray, SurfacePoint};
 use crate::math::{DVec3, Frame, turn};
 use crate::path::{Subpath, Vertex, VertexKind, connect, technique_subpaths};
 use crate::sampler::SampleStream;
@@ -22,12 +22,12 @@ use std::f64::consts::TAU;
 /// Trace the ray leaving vertex `from` in unit direction `w`; the first hit as a scattering vertex
 /// (`wo = −w`, its BSDF, not delta).
 pub fn trace(scene: &Scene, from: &Vertex, w: DVec3) -> Option<Vertex> {
-    let o = if from.on_surface(scene) {
-        offset_origin(from.p(), from.n(), w)
+    let ray = if from.on_surface(scene) {
+        Ray::leaving(&from.point, w)
     } else {
-        from.p()
+        Ray::new(from.p(), w)
     };
-    let found = scene.intersect(&Ray::new(o, w));
+    let found = scene.intersect(&ray);
     let hit = found.as_ref()?;
     // The BSDF is built inside the vertex (a BSDF returned by value was copied twice more).
     let mut v = Vertex {

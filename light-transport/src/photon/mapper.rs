@@ -21,7 +21,7 @@ use super::map::{Lookup, PhotonMap, PhotonMapError};
 use super::radius::{MaxRadius, Resolved};
 use super::trace::trace_photons;
 use crate::bsdf::TransportMode;
-use crate::geometry::{Ray, offset_origin};
+use crate::geometry::Ray;
 use crate::integrators::direct::{mis, next_event};
 use crate::integrators::{Estimator, Splat};
 use crate::path::{MisHeuristic, camera_ray};
@@ -381,12 +381,7 @@ fn bounce(
         return None;
     }
     let weight = bs.f * (bs.wi.dot(p.ns).abs() / bs.pdf);
-    Some((
-        weight,
-        Ray::new(offset_origin(p.p, p.n, bs.wi), bs.wi),
-        bs.pdf,
-        bs.delta,
-    ))
+    Some((weight, Ray::leaving(p, bs.wi), bs.pdf, bs.delta))
 }
 
 impl Estimator for PhotonMapper {

@@ -5,7 +5,8 @@ use crate::accel::{Bvh, Compact, Primitive};
 use crate::bsdf::{Bsdf, PrebuiltLobes};
 use crate::camera::Camera;
 use crate::geometry::{
-    Hit, NO_SHADING, Ray, Sphere, SurfacePoint, Triangle, TriangleShading, offset_origin,
+    Hit, NO_PRIMITIVE, NO_SHADING, Ray, Sphere, SurfaceEnd, SurfacePoint, Triangle,
+    TriangleShading, offset_origin,
 };
 use crate::light::{LightDistribution, LightKind};
 use crate::math::{DVec3, Frame};
@@ -295,26 +296,35 @@ impl Scene {
     /// The closest surface along a ray.
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.bvh.closest_hit(ray.o, ray.d, ray.t_max)
+        self.bvh
+            .closest_hit_leaving(ray.o, ray.d, ray.t_max, ray.leaves)
     }
 
-    /// Whether two points see each other (each offset from its surface toward the other).
-    pub fn visible(&self, a: DVec3, na: Option<DVec3>, b: DVec3, nb: Option<DVec3>) -> bool {
+    /// Whether two points see each other (each end on a surface offset from it toward the other;
+    /// the ends' own triangles are not tested, [`SurfaceEnd`]).
+    pub fn visible(
+        &self,
+        a: DVec3,
+        on_a: Option<SurfaceEnd>,
+        b: DVec3,
+        on_b: Option<SurfaceEnd>,
+    ) -> bool {
         let d = b - a;
-        let o = match na {
-            Some(n) => offset_origin(a, n, d),
-            None => a,
+        let o = on_a.map_or(a, |s| offset_origin(a, s.n, d));
+        let e = on_b.map_or(b, |s| offset_origin(b, s.n, -d));
+        // An end's triangle is skipped when the offset segment lies on one side of its plane: not
+        // so when the other end lies within the offset of that plane, e.g. on the same triangle.
+        let skip = |end: Option<SurfaceEnd>, p: DVec3| {
+            end.filter(|s| (o - p).dot(s.n) * (e - p).dot(s.n) > 0.0)
+                .map_or(NO_PRIMITIVE, |s| s.primitive)
         };
-        let e = match nb {
-            Some(n) => offset_origin(b, n, -d),
-            None => b,
-        };
+        let ends = [skip(on_a, a), skip(on_b, b)];
         let v = e - o;
         let dist = v.length();
         if !(dist > 0.0) {
             return true;
         }
-        !self.bvh.occluded(o, v / dist, dist)
+        !self.bvh.occluded_between(o, v / dist, dist, ends)
     }
 
     /// The BSDF at a surface point: in the shading frame (shading normal, shading tangent), the
