@@ -3,7 +3,9 @@
 //! point a little behind the ray's origin, so that neither rounding nor obvhs's smallest entry
 //! distance can lose a hit; primitives are intersected in f64 and the closest f64 hit is kept.
 //! Triangles whose bounding box is mostly empty enter the BVH as several references (`split`).
-//! Occlusion queries first test the thread's recent occluders (`occluders`).
+//! Occlusion queries first test the thread's recent occluders (`occluders`). A ray leaving a
+//! surface, or a segment between two surfaces, skips the triangles it leaves
+//! ([`Bvh::closest_hit_leaving`], [`Bvh::occluded_between`]).
 
 use crate::geometry::{
     Derivatives, Hit, NO_PRIMITIVE, Sphere, SurfacePoint, Triangle, TriangleFrame, TriangleShading,
