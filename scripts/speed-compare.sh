@@ -13,6 +13,8 @@
 # side of the fix would render different built-ins) and the built-ins cornell door ring pool; ALGOS = pt bdpt pssmlt mmlt mlt cmlt memlt mept; ROUNDS = 3; RESOLUTION = 512x288;
 # MAX_DEPTH = 7; SPP = 4 (PT: 4× that). REV is built in a git worktree (scripts/build-rev.sh:
 # ../charted-REV, or OLD_DIR); NEW_BIN and OLD_BIN name binaries to use instead of building them.
+# Both builds run the same estimators: roulette, the Metropolis methods' direct pass and the Sobol
+# sampler, where a build has them, are off (below; their gains are measured at equal time).
 # Prints, per scene and algorithm, the median render time of each build, the speed-up
 # (old time / new time, > 1 is faster) and the peak resident memory of each build; a final line
 # gives the geometric mean of the speed-ups.
@@ -44,12 +46,26 @@ old_direct=() new_direct=()
 knows_direct "$old_bin" && old_direct=(--direct-samples 0)
 knows_direct "$new_bin" && new_direct=(--direct-samples 0)
 
+# Likewise the Owen-scrambled Sobol sampler of the pass-based methods (default since issue 17; an
+# estimator change like the two above, measured at equal time): builds that know --sampler draw
+# independent numbers, as builds before it did. SOBOL=1 keeps each build's default sampler (the
+# protocol of this script before `5693606`; Sobol points cost PT 4–6% and BDPT 1–4% per sample).
+knows_sampler() { "$1" render --help 2>/dev/null | grep -q -- '--sampler <'; }
+old_sampler=() new_sampler=()
+if [[ ${SOBOL:-0} != 1 ]]; then
+  knows_sampler "$old_bin" && old_sampler=(--sampler independent)
+  knows_sampler "$new_bin" && new_sampler=(--sampler independent)
+fi
+
 # One run: prints "render-seconds peak-kilobytes".
 run() {
   local bin=$1 scene=$2 algo=$3 n=$spp extra=()
   [[ $algo == pt ]] && n=$((4 * spp))
   if [[ $algo == pt || $algo == bdpt || $algo == pssmlt ]]; then
     if [[ $bin == "$old_bin" ]]; then extra=("${old_rr[@]}"); else extra=("${new_rr[@]}"); fi
+  fi
+  if [[ $algo == pt || $algo == bdpt || $algo == erpt || $algo == mept ]]; then
+    if [[ $bin == "$old_bin" ]]; then extra+=("${old_sampler[@]}"); else extra+=("${new_sampler[@]}"); fi
   fi
   if [[ $algo != pt && $algo != bdpt ]]; then
     if [[ $bin == "$old_bin" ]]; then extra+=("${old_direct[@]}"); else extra+=("${new_direct[@]}"); fi
