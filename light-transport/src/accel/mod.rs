@@ -556,8 +556,9 @@ impl Bvh {
 
     /// [`Bvh::closest_hit`] of a ray that leaves primitive `leaves` ([`Ray::leaving`]): if that
     /// is a triangle, the ray cannot hit it and it is not tested. (Its origin lies on the
-    /// triangle, so traversal always reaches the triangle's leaf; rays leaving a surface tested
-    /// their own triangle in 30–40% of their primitive tests, with its coplanar neighbours.)
+    /// triangle, so traversal always reaches the triangle's leaf: 38–39% of the closest-hit
+    /// tests of PT on `veach-bidir`, `door` and `cornell` were of that triangle or another in its
+    /// plane.)
     ///
     /// [`Ray::leaving`]: crate::geometry::Ray::leaving
     pub fn closest_hit_leaving(&self, o: DVec3, d: DVec3, t_max: f64, leaves: u32) -> Option<Hit> {
@@ -700,9 +701,10 @@ impl Bvh {
     }
 
     /// [`Bvh::occluded`] for a segment between two surface points, offset from the primitives
-    /// `ends` toward each other ([`SurfaceEnd`]): the segment cannot cross an end's triangle, which
-    /// is not tested. (Traversal reaches both ends' leaves; shadow rays between surfaces tested an
-    /// end's triangle, or a coplanar neighbour, in half their primitive tests and more.)
+    /// `ends` toward each other, which the segment cannot cross ([`SurfaceEnd`]; an end that it
+    /// might cross is given as `NO_PRIMITIVE`): they are not tested. (Traversal reaches both ends'
+    /// leaves: 50–96% of PT's occlusion tests on those scenes were of an end's triangle or
+    /// another in its plane.)
     ///
     /// [`SurfaceEnd`]: crate::geometry::SurfaceEnd
     pub fn occluded_between(&self, o: DVec3, d: DVec3, t_max: f64, ends: [u32; 2]) -> bool {

@@ -31,7 +31,8 @@ impl Ray {
     /// The unbounded ray leaving the surface at `point` in direction `w`: its origin offset along
     /// the geometric normal to the side `w` points to ([`offset_origin`]). The ray starts off the
     /// plane of the point's triangle and moves away from it (or along it), so it cannot hit that
-    /// triangle, and the BVH skips its test ([`SurfaceEnd`]).
+    /// triangle, and the BVH does not test it (`Bvh::closest_hit_leaving`; a sphere is still
+    /// tested, since a ray into it leaves through it).
     #[inline]
     pub fn leaving(point: &SurfacePoint, w: DVec3) -> Self {
         Self {
@@ -61,10 +62,10 @@ pub fn offset_origin(p: DVec3, n: DVec3, w: DVec3) -> DVec3 {
 }
 
 /// One end of a segment on a surface (`Scene::visible`): the geometric normal the end is offset
-/// along, toward the other end, and the primitive it lies on. A segment whose ends are offset so
-/// lies on one side of each end's triangle's plane (unless the other end lies within the offset
-/// of that plane, where the geometry term of the segment vanishes to the same order), so neither
-/// end's triangle needs testing.
+/// along, toward the other end, and the primitive it lies on. A segment whose offset ends both lie
+/// on one side of an end's triangle's plane cannot cross that triangle, which is then not tested
+/// (`Bvh::occluded_between`); `Scene::visible` checks the sides, since the other end may lie
+/// within the offset of the plane (two points on one triangle), and then tests the triangle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfaceEnd {
     /// Unit geometric normal.
