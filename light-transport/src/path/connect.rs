@@ -63,10 +63,20 @@ pub fn connect(
     unoccluded(scene, &light[s - 1], &camera[t - 1]).then_some(c)
 }
 
-/// Whether the edge between vertices `a` and `b` is unoccluded (ray origins offset along the
-/// normals of the vertices that lie on surfaces).
-pub fn unoccluded(scene: &Scene, a: &Vertex, b: &Vertex) -> bool {
-    scene.visible(a.p(), surface_end(scene, a), b.p(), surface_end(scene, b))
+/// Whether the edge between the light side's vertex `light` and the camera side's vertex `camera`
+/// is unoccluded (ends offset along the normals of the vertices that lie on surfaces).
+///
+/// The segment is traced from the camera side: a light's surroundings (a lamp shade, a
+/// reflector) often fill the boxes around it, and a traversal that starts among them visits
+/// them first. The answer is the same either way (images bit for bit alike); BDPT on
+/// `veach-bidir` ran 4.0% fewer instructions so (README).
+pub fn unoccluded(scene: &Scene, light: &Vertex, camera: &Vertex) -> bool {
+    scene.visible(
+        camera.p(),
+        surface_end(scene, camera),
+        light.p(),
+        surface_end(scene, light),
+    )
 }
 
 /// [`connect`] without the visibility test, for paths whose connecting edge is known to be
