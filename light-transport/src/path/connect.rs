@@ -67,9 +67,9 @@ pub fn connect(
 /// is unoccluded (ends offset along the normals of the vertices that lie on surfaces).
 ///
 /// The segment is traced from the camera side: a light's surroundings (a lamp shade, a
-/// reflector) often fill the boxes around it, and a traversal that starts among them visits
-/// them first. The answer is the same either way (images bit for bit alike); BDPT on
-/// `veach-bidir` ran 4.0% fewer instructions so (README).
+/// reflector) often fill the boxes around it and the light subpath's first vertices, and a
+/// traversal that starts among them has to clear them first. The answer is the same either way
+/// (images bit for bit alike); BDPT on `veach-bidir` ran 4.0% fewer instructions so (README).
 pub fn unoccluded(scene: &Scene, light: &Vertex, camera: &Vertex) -> bool {
     scene.visible(
         camera.p(),
