@@ -301,7 +301,7 @@ impl Scene {
     }
 
     /// Whether two points see each other (each end on a surface offset from it toward the other;
-    /// the ends' own triangles are not tested, [`SurfaceEnd`]).
+    /// an end's triangle is not tested when the offset segment cannot cross it, [`SurfaceEnd`]).
     pub fn visible(
         &self,
         a: DVec3,
@@ -312,19 +312,20 @@ impl Scene {
         let d = b - a;
         let o = on_a.map_or(a, |s| offset_origin(a, s.n, d));
         let e = on_b.map_or(b, |s| offset_origin(b, s.n, -d));
+        let v = e - o;
+        let dist = v.length();
+        if !(dist > 0.0) {
+            return true;
+        }
         // An end's triangle is skipped when the offset segment lies on one side of its plane: not
         // so when the other end lies within the offset of that plane, e.g. on the same triangle.
         let skip = |end: Option<SurfaceEnd>, p: DVec3| {
             end.filter(|s| (o - p).dot(s.n) * (e - p).dot(s.n) > 0.0)
                 .map_or(NO_PRIMITIVE, |s| s.primitive)
         };
-        let ends = [skip(on_a, a), skip(on_b, b)];
-        let v = e - o;
-        let dist = v.length();
-        if !(dist > 0.0) {
-            return true;
-        }
-        !self.bvh.occluded_between(o, v / dist, dist, ends)
+        !self
+            .bvh
+            .occluded_between(o, v / dist, dist, [skip(on_a, a), skip(on_b, b)])
     }
 
     /// The BSDF at a surface point: in the shading frame (shading normal, shading tangent), the
