@@ -394,8 +394,9 @@ mod tests {
 
     /// The division-free rejection changes no answer: rays aimed at triangles' edges and corners
     /// (barycentrics 0, 1 and `b1 + b2 = 1`, moved by a few units in the last place), at every
-    /// scale from 10⁻⁷ to 10⁵ and on slivers, give the hits and the numbers of the test with the
-    /// division first, bit for bit. It fails with a margin of 0 or 10⁻¹⁷.
+    /// scale from 10⁻⁷ to 10⁵ and on slivers, from origins on the plane or near it and to ends
+    /// within a few units in the last place of the hit, give the hits and the numbers of the test
+    /// with the division first, bit for bit. It fails with a margin of 0 or 10⁻¹⁷.
     #[test]
     fn division_free_rejection_changes_no_answer() {
         use mcmc_core::rng::{stream, uniform};
@@ -430,16 +431,22 @@ mod tests {
                 _ => (x, (1.0 - x) * r()),
             };
             let aim = tri.p[0] * (1.0 - b1 - b2) + tri.p[1] * b1 + tri.p[2] * b2;
-            let o = aim + DVec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * scale * 4.0;
+            let mut o = aim + DVec3::new(r() - 0.5, r() - 0.5, r() - 0.5) * scale * 4.0;
             let mut d = (aim - o).normalize();
             // Move the direction by a few units in the last place.
             let ulps = |v: f64, k: i64| f64::from_bits((v.to_bits() as i64 + k) as u64);
             let k = (r() * 9.0) as i64 - 4;
             d.x = ulps(d.x, k);
-            let t_max = if r() < 0.5 {
-                f64::INFINITY
-            } else {
-                scale * 4.0 * r()
+            if case % 7 == 0 {
+                // An origin on the triangle's plane, or within 10⁻¹⁵ of it on either side.
+                o = aim + d * (r() - 0.5) * scale * 1e-15 * (case % 2) as f64;
+            }
+            // No end, an end anywhere, or an end within a few units in the last place of the hit.
+            let t_max = match (case / 6) % 3 {
+                0 => f64::INFINITY,
+                1 => scale * 4.0 * r(),
+                _ => intersect_with_division(&tri, o, d, f64::INFINITY)
+                    .map_or(1.0, |(t, _, _)| ulps(t, (r() * 9.0) as i64 - 4)),
             };
             let want = intersect_with_division(&tri, o, d, t_max);
             let got = tri.intersect(o, d, t_max);
