@@ -17,7 +17,8 @@
 # instead of building them (so the checkout can change while a measurement runs). NEW_SETTING
 # adds `charted render` options to this build's renders only (e.g. NEW_SETTING="--roulette-walks
 # both": a setting against the old build's defaults). Renders stay in OUT (default
-# out/equal-time-builds). Resolution and depth as scripts/equal-time-variance.sh.
+# out/equal-time-builds). Resolution, depth, PAIRS and SEED_BASE (other seeds, for a run independent
+# of an earlier one) as scripts/equal-time-variance.sh.
 set -euo pipefail
 rev=$1 time=$2 algos=$3 scenes=$4
 root=$(cd "$(dirname "$0")/.." && pwd)

@@ -13,13 +13,14 @@
 # A setting is a string of `charted render` options (may be empty: ""). SCENES are built-in names
 # or pbrt files; `veach-bidir` names ../shared/scenes/veach-bidir/scene.pbrt. veach-bidir renders
 # at 256×144 with maximum depth 7, the built-ins at 256×256 with maximum depth 8 (RESOLUTION and
-# MAX_DEPTH override both). PAIRS defaults to 2 (seeds 1–4). BIN names a binary to use instead of
+# MAX_DEPTH override both). PAIRS defaults to 2 (seeds 1–4); SEED_BASE shifts the seeds (SEED_BASE=6:
+# seeds 7–10), for a run independent of an earlier one. BIN names a binary to use instead of
 # building this checkout.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=$1 time=$2 algo=$3 scenes=$4
 shift 4
-pairs=${PAIRS:-2}
+pairs=${PAIRS:-2} seed_base=${SEED_BASE:-0}
 mkdir -p "$out"
 if [[ -z ${BIN:-} ]]; then
   cargo build --release --quiet
@@ -40,13 +41,14 @@ for scene in $scenes; do
     k=$((k + 1))
     spp= sum=0 mses=()
     for pair in $(seq 1 "$pairs"); do
-      for seed in $((2 * pair - 1)) $((2 * pair)); do
+      first=$((seed_base + 2 * pair - 1))
+      for seed in $first $((first + 1)); do
         # shellcheck disable=SC2086 # a setting is a list of options
         log=$("$BIN" render "$scene" --algo "$algo" --time "$time" --seed "$seed" \
           --resolution "$res" --max-depth "$depth" $setting -o "$out/$name-$k-$seed.exr" 2>&1)
         [[ -z $spp ]] && spp=$(sed -n 's/^samples *\([0-9.]*\) spp.*/\1/p' <<< "$log")
       done
-      mse=$("$BIN" diff "$out/$name-$k-$((2 * pair - 1)).exr" "$out/$name-$k-$((2 * pair)).exr" |
+      mse=$("$BIN" diff "$out/$name-$k-$first.exr" "$out/$name-$k-$((first + 1)).exr" |
         sed -n 's/.*  MSE \([^ ]*\) .*/\1/p')
       sum=$(awk -v s="$sum" -v m="$mse" 'BEGIN { print s + m }')
       mses+=("$mse")
