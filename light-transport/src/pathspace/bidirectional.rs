@@ -256,7 +256,7 @@ impl Bidirectional {
                 pivot: 0,
             };
             if y.path.close_with_camera_subpath(scene, cam).is_some() {
-                y.finish_candidate(scene, importance, change, s);
+                y.finish_candidate(scene, importance, x, change, s);
             } else {
                 y.change = Some(change);
                 y.discard();

@@ -106,7 +106,7 @@ impl Mutation for Caustic<'_> {
             added: k - 1 - i0,
             pivot: 0,
         };
-        y.finish_candidate(scene, self.importance, change, k);
+        y.finish_candidate(scene, self.importance, x, change, k);
         Ok(())
     }
 

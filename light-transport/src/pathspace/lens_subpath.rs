@@ -103,7 +103,7 @@ impl Mutation for LensSubpath<'_> {
             added,
             pivot: 0,
         };
-        y.finish_candidate(scene, self.importance, change, j);
+        y.finish_candidate(scene, self.importance, x, change, j);
         Ok(())
     }
 

@@ -656,7 +656,7 @@ impl<'a> ManifoldPerturbation<'a> {
             yp.vertices[i] = v;
         }
         let connection = if second.is_empty() { s.a.max(s.c) } else { 0 };
-        y.finish_candidate(scene, self.importance, s.change(), connection);
+        y.finish_candidate(scene, self.importance, x, s.change(), connection);
         Ok(())
     }
 
@@ -1115,7 +1115,7 @@ impl Mutation for ManifoldPerturbation<'_> {
         for (&i, v) in second.iter().zip(walked) {
             yp.vertices[i] = v;
         }
-        y.finish_candidate(scene, self.importance, s.change(), connection);
+        y.finish_candidate(scene, self.importance, x, s.change(), connection);
         Ok(())
     }
 

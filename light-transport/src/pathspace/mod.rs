@@ -47,7 +47,7 @@ pub use mutations::{
     MutationProbabilities, MutationSettings, Mutations, PhotonProposals, REGISTRY, UserPathRule,
 };
 pub use new_path::NewPath;
-pub use path::{FullPath, Scratch};
+pub use path::{FullPath, Resume, Traced, Walks};
 pub use perturbation::PerturbationSettings;
 pub use photon_map_proposal::PhotonMapProposal;
 pub use state::PathState;

@@ -36,13 +36,64 @@ impl Clone for FullPath {
     }
 }
 
-/// Scratch space for evaluating paths (kept per thread to avoid allocation).
+/// The two walks of a path's evaluation ([`FullPath::strategies`]), kept with its chain state:
+/// a candidate that keeps a run of the path's vertices at either end resumes the walks where its
+/// own vertices begin ([`FullPath::strategies_resumed`]).
 #[derive(Clone, Debug, Default)]
-pub struct Scratch {
+pub struct Walks {
     /// The walk from the light, `v_0 … v_k`.
     pub light: Vec<Traced>,
     /// The walk from the lens, `v_k … v_0`.
     pub camera: Vec<Traced>,
+    /// How many leading entries of each walk are valid ([`walk`]'s results); `None` before a
+    /// path was walked, or after [`Walks::forget`].
+    valid: Option<(usize, usize)>,
+    /// The position and delta flag of each vertex the walks were made from, `v_0` first: what a
+    /// candidate's kept vertices are checked against before their entries are reused.
+    vertices: Vec<(DVec3, bool)>,
+}
+
+impl Walks {
+    /// Forget the walks (their path changed without a new evaluation): nothing resumes them.
+    pub fn forget(&mut self) {
+        self.valid = None;
+    }
+
+    /// How many leading entries of the light and the camera walk are valid; `None` when no
+    /// path's walks are held.
+    pub fn valid(&self) -> Option<(usize, usize)> {
+        self.valid
+    }
+
+    /// How many of `vertices`' leading (`light`) and trailing (`camera`) vertices, at most
+    /// `light` and `camera`, are bit for bit where these walks' vertices were, with the same
+    /// delta flags: the vertices whose walk entries can be reused.
+    fn kept(&self, vertices: &[Vertex], light: usize, camera: usize) -> (usize, usize) {
+        let same = |a: &(DVec3, bool), v: &Vertex| {
+            a.1 == v.delta && a.0.to_array().map(f64::to_bits) == v.p().to_array().map(f64::to_bits)
+        };
+        let leading = (self.vertices.iter().zip(vertices))
+            .take(light)
+            .take_while(|(a, v)| same(a, v))
+            .count();
+        let trailing = (self.vertices.iter().rev().zip(vertices.iter().rev()))
+            .take(camera)
+            .take_while(|(a, v)| same(a, v))
+            .count();
+        (leading, trailing)
+    }
+}
+
+/// The walks of a path a candidate was made from, and how many of its vertices the candidate
+/// keeps at each end (a mutation's [`super::mutation::Change`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Resume<'a> {
+    /// The source path's walks.
+    pub walks: &'a Walks,
+    /// Leading vertices `v_0 …` the candidate keeps.
+    pub light: usize,
+    /// Trailing vertices `… v_k` the candidate keeps.
+    pub camera: usize,
 }
 
 /// What a walk along a path leaves at one vertex ([`walk`]): the fields [`retrace`] writes into
@@ -181,39 +232,72 @@ impl FullPath {
     }
 
     /// `C*_s` for every strategy `s = 0 … k` into `out` (`None` where the strategy is invalid or
-    /// contributes nothing), without visibility tests (the path's edges are known to be clear).
+    /// contributes nothing), without visibility tests (the path's edges are known to be clear);
+    /// the walks it makes are left in `walks`.
     ///
     /// One walk from each end ([`walk`]) gives every prefix's throughput and every vertex's
     /// factor toward its neighbours, so each strategy is one product: `O(k)` BSDF evaluations
     /// per path, with no vertex copied. The numbers are those of connecting the two retraced
     /// subpaths strategy by strategy ([`retrace`], [`crate::path::connect_unoccluded`]), bit for
     /// bit (a test keeps that version to compare).
-    pub fn strategies(&self, scene: &Scene, scratch: &mut Scratch, out: &mut Vec<Option<Rgb>>) {
+    pub fn strategies(&self, scene: &Scene, walks: &mut Walks, out: &mut Vec<Option<Rgb>>) {
+        self.strategies_resumed(scene, None, walks, out);
+    }
+
+    /// [`FullPath::strategies`] of a candidate made from a path whose walks are `source`: the
+    /// entries of each walk that read only vertices the candidate kept are copied, and the walk
+    /// goes on from there ([`walk_resumed`]). A mutation that replaces the camera end keeps the
+    /// light walk up to its first new vertex, and one that replaces a middle section (the
+    /// bidirectional mutation) keeps both walks up to it. Kept vertices are checked against the
+    /// source's (position and delta flag, bit for bit); the numbers are bit for bit those of
+    /// walking anew (a test compares them for every mutation).
+    pub fn strategies_resumed(
+        &self,
+        scene: &Scene,
+        source: Option<Resume<'_>>,
+        walks: &mut Walks,
+        out: &mut Vec<Option<Rgb>>,
+    ) {
         out.clear();
+        walks.valid = None;
         let n = self.vertices.len();
         if n < 2 {
             return;
         }
         let k = n - 1;
         let v = &self.vertices;
+        let resume = source.and_then(|r| {
+            let (light, camera) = r.walks.valid?;
+            let (kl, kc) = r.walks.kept(v, r.light, r.camera);
+            Some((
+                (&r.walks.light[..], light, kl),
+                (&r.walks.camera[..], camera, kc),
+            ))
+        });
+        let (light_from, camera_from) = resume.unzip();
         // The light side's prefixes end at `v_{k−1}` at the latest; its walk goes on to `v_k` only
         // for the factor of `v_{k−1}` toward the lens point.
-        let lv = walk(
+        let lv_walked = walk_resumed(
             scene,
             n,
             |i| &v[i],
             TransportMode::Importance,
-            &mut scratch.light,
-        )
-        .min(k);
-        let cv = walk(
+            light_from,
+            &mut walks.light,
+        );
+        let lv = lv_walked.min(k);
+        let cv = walk_resumed(
             scene,
             n,
             |j| &v[k - j],
             TransportMode::Radiance,
-            &mut scratch.camera,
+            camera_from,
+            &mut walks.camera,
         );
-        let (light, camera) = (&scratch.light, &scratch.camera);
+        walks.valid = Some((lv_walked, cv));
+        walks.vertices.clear();
+        walks.vertices.extend(v.iter().map(|x| (x.p(), x.delta)));
+        let (light, camera) = (&walks.light, &walks.camera);
         let end = |vertex, t: &Traced| End {
             vertex,
             beta: t.beta,
@@ -334,10 +418,54 @@ pub fn walk<'a>(
     if !(pdf_dir > 0.0) || !weight.is_finite() {
         return 1;
     }
-    let mut beta = weight;
+    out[1].beta = weight;
     out[1].pdf_fwd = start.to_area(pdf_dir, next, scene);
-    let mut prev = start;
-    for i in 1..n {
+    walk_on(scene, n, at, mode, out, 1)
+}
+
+/// [`walk`] resumed from the walk `source = (entries, valid)` of a path whose first `kept`
+/// vertices are `at(0) … at(kept − 1)`; `None`, or fewer than two kept vertices: [`walk`].
+///
+/// Step `i` of the walk reads vertices `i − 1`, `i` and `i + 1` only, so entries `0 … kept − 2`
+/// and the throughput, density and direction of entry `kept − 1` are the source's; the walk goes
+/// on from step `kept − 1`. A source walk that ended before that step ends here where it did.
+pub fn walk_resumed<'a>(
+    scene: &Scene,
+    n: usize,
+    at: impl Fn(usize) -> &'a Vertex,
+    mode: TransportMode,
+    source: Option<(&[Traced], usize, usize)>,
+    out: &mut Vec<Traced>,
+) -> usize {
+    let Some((entries, valid, kept)) = source.filter(|&(_, _, kept)| kept >= 2 && kept <= n) else {
+        return walk(scene, n, at, mode, out);
+    };
+    let r = kept - 1;
+    out.clear();
+    if valid <= r {
+        out.extend_from_slice(&entries[..valid]);
+        out.resize(n, Traced::default());
+        return valid;
+    }
+    out.extend_from_slice(&entries[..=r]);
+    out[r].f_next = Rgb::BLACK;
+    out.resize(n, Traced::default());
+    walk_on(scene, n, at, mode, out, r)
+}
+
+/// Steps `from … n − 1` of [`walk`] (`from ≥ 1`), entries `0 … from` already in `out` (of entry
+/// `from` its throughput and density).
+fn walk_on<'a>(
+    scene: &Scene,
+    n: usize,
+    at: impl Fn(usize) -> &'a Vertex,
+    mode: TransportMode,
+    out: &mut [Traced],
+    from: usize,
+) -> usize {
+    let mut beta = out[from].beta;
+    let mut prev = at(from - 1);
+    for i in from..n {
         let v = at(i);
         let wo = (prev.p() - v.p()).normalize_or_zero();
         out[i].wo = wo;
@@ -418,7 +546,7 @@ mod tests {
     #[test]
     fn strategies_equal_connecting_retraced_subpaths() {
         let mut rng = stream(9, 0);
-        let (mut scratch, mut out) = (Scratch::default(), Vec::new());
+        let (mut scratch, mut out) = (Walks::default(), Vec::new());
         for name in builtin::all() {
             let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((32, 24))).unwrap();
             let mut sampler = IndependentStream::new(stream(10, 0));

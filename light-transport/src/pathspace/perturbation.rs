@@ -340,7 +340,7 @@ pub fn camera_side_propose(
         yp.vertices.extend_from_slice(&xp.vertices[..s]);
         yp.vertices.extend(cam.drain(..).rev());
         yp.vertices[s].delta = false;
-        y.finish_candidate(scene, importance, chain.change(k), s);
+        y.finish_candidate(scene, importance, x, chain.change(k), s);
         Ok(())
     })
 }

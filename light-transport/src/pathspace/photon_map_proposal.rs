@@ -151,6 +151,7 @@ impl Mutation for PhotonMapProposal<'_> {
         y.finish_candidate(
             self.scene,
             self.importance,
+            x,
             Self::record(section, added),
             l + 1,
         );

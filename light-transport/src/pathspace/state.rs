@@ -6,7 +6,7 @@
 //! the driver scales it by `b / I(colour)`, so only its direction matters.
 
 use super::mutation::Change;
-use super::path::{FullPath, Scratch};
+use super::path::{FullPath, Resume, Walks};
 use crate::metropolis::{BootstrapSample, Contribution, ImportanceKind, Recordable};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -78,6 +78,9 @@ pub struct PathState {
     /// that mutation from the state it was proposed from ([`Recordable::proposal_probability`];
     /// set by [`super::mutations::Mutations::run`], stale on other candidates).
     pub chosen_with: Option<f64>,
+    /// The walks of the path's last evaluation: a candidate made from this state resumes them
+    /// ([`PathState::finish_candidate`]).
+    pub walks: Walks,
 }
 
 impl Clone for PathState {
@@ -89,6 +92,7 @@ impl Clone for PathState {
             change: self.change,
             suitability: self.suitability.clone(),
             chosen_with: self.chosen_with,
+            walks: self.walks.clone(),
         }
     }
 
@@ -104,6 +108,7 @@ impl Clone for PathState {
         self.change = source.change;
         self.suitability.clone_from(&source.suitability);
         self.chosen_with = source.chosen_with;
+        self.walks.clone_from(&source.walks);
     }
 }
 
@@ -134,20 +139,38 @@ impl Recordable for PathState {
 }
 
 thread_local! {
-    static SCRATCH: RefCell<(Scratch, Vec<Option<Rgb>>)> = RefCell::new(Default::default());
+    static VALUES: RefCell<Vec<Option<Rgb>>> = const { RefCell::new(Vec::new()) };
 }
 
 impl PathState {
     /// Evaluate the path: per-strategy importances and the recorded colour `scale · f / Σ_s p_s`.
     /// Returns whether the path carries light (some strategy has a positive contribution).
     pub fn evaluate(&mut self, scene: &Scene, importance: ImportanceKind, scale: f64) -> bool {
+        self.evaluate_resumed(scene, importance, scale, None)
+    }
+
+    /// [`PathState::evaluate`] for a candidate made from `source` by `change`: the walks of the
+    /// vertices it kept are resumed from the source's ([`FullPath::strategies_resumed`]).
+    fn evaluate_resumed(
+        &mut self,
+        scene: &Scene,
+        importance: ImportanceKind,
+        scale: f64,
+        source: Option<(&PathState, Change)>,
+    ) -> bool {
         self.suitability.clear();
         self.strategy.clear();
         self.contribution.splats.clear();
         self.contribution.importance = 0.0;
-        let best = SCRATCH.with(|cell| {
-            let (scratch, values) = &mut *cell.borrow_mut();
-            self.path.strategies(scene, scratch, values);
+        let resume = source.map(|(x, c)| Resume {
+            walks: &x.walks,
+            light: (c.l + 1).max(0) as usize,
+            camera: x.path.vertices.len().saturating_sub(c.m),
+        });
+        let best = VALUES.with(|cell| {
+            let values = &mut *cell.borrow_mut();
+            self.path
+                .strategies_resumed(scene, resume, &mut self.walks, values);
             let mut best: Option<(Rgb, f64)> = None;
             for v in values.iter() {
                 let i = v.map_or(0.0, |c| importance.of(c));
@@ -191,7 +214,8 @@ impl PathState {
         self.contribution.importance > 0.0
     }
 
-    /// Finish a candidate whose vertices a mutation just placed: record `change`, and evaluate it
+    /// Finish a candidate whose vertices a mutation just placed, made from `source` by `change`:
+    /// record `change`, and evaluate it (resuming the source's walks over the vertices it kept)
     /// unless the edge `v_{connection−1} → v_connection` it made by connecting two subpaths is
     /// occluded (then it carries no light and is rejected). `connection = 0`: nothing to test
     /// (the camera walk reached the light itself).
@@ -199,6 +223,7 @@ impl PathState {
         &mut self,
         scene: &Scene,
         importance: ImportanceKind,
+        source: &PathState,
         change: Change,
         connection: usize,
     ) {
@@ -207,13 +232,14 @@ impl PathState {
         let clear = connection == 0
             || (connection < v.len()
                 && crate::path::unoccluded(scene, &v[connection - 1], &v[connection]));
-        if !clear || !self.evaluate(scene, importance, 1.0) {
+        if !clear || !self.evaluate_resumed(scene, importance, 1.0, Some((source, change))) {
             self.discard();
         }
     }
 
     /// Mark the state as carrying no light (a candidate whose connection is occluded).
     pub fn discard(&mut self) {
+        self.walks.forget();
         self.suitability.clear();
         self.strategy.clear();
         self.contribution.splats.clear();

@@ -463,7 +463,13 @@ impl Mutation for UserPathProposal<'_> {
         yp.vertices.clear();
         yp.vertices.extend(light_part);
         yp.vertices.extend_from_slice(&xv[d..]);
-        y.finish_candidate(self.scene, self.importance, Self::record(d, m + 1), m + 1);
+        y.finish_candidate(
+            self.scene,
+            self.importance,
+            x,
+            Self::record(d, m + 1),
+            m + 1,
+        );
         Ok(())
     }
 
