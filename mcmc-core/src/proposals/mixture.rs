@@ -301,11 +301,24 @@ impl<S> Mixture<'_, S> {
             return Proposed { kind, ..p };
         }
         let ln_ratio = match self.rule {
+            // A candidate its own component rejects outright is rejected whatever the selection
+            // probabilities: `y`'s suitabilities (every component's, some costly) are not asked.
+            MixtureRule::PerComponent if p.ln_ratio == f64::NEG_INFINITY => p.ln_ratio,
             MixtureRule::PerComponent => match (suited_x, self.suited(y)) {
                 (Some(sx), Some(sy)) => {
-                    // ln P_k(y) − ln P_k(x); the base weight cancels.
+                    // ln P_k(y) − ln P_k(x); the base weight cancels. One logarithm of the
+                    // ratio, exactly 0 when both states suit the same components (the usual
+                    // case); four where the ratio leaves the normal range.
                     let (tx, ty): (f64, f64) = (sx.iter().sum(), sy.iter().sum());
-                    p.ln_ratio + sy[k].ln() - ty.ln() - sx[k].ln() + tx.ln()
+                    let r = (sy[k] * tx) / (sx[k] * ty);
+                    let ln_selection = if r == 1.0 {
+                        0.0
+                    } else if r.is_normal() {
+                        r.ln()
+                    } else {
+                        sy[k].ln() - ty.ln() - sx[k].ln() + tx.ln()
+                    };
+                    p.ln_ratio + ln_selection
                 }
                 _ => p.ln_ratio,
             },
@@ -488,6 +501,110 @@ mod tests {
             assert!((p(-1.0, 3) - last_p).abs() < 1e-15);
             assert_eq!(p(1.0, 4), 0.0);
         }
+    }
+
+    /// A move whose candidates are rejected outright (ratio `−∞`) when they land at a negative
+    /// first coordinate, and that counts how often its suitability is asked.
+    struct Counting(std::sync::Arc<std::sync::atomic::AtomicUsize>);
+
+    impl Proposal<Vec<f64>> for Counting {
+        fn propose(&self, x: &Vec<f64>, y: &mut Vec<f64>, rng: &mut ChainRng) -> Proposed {
+            y.clone_from(x);
+            y[0] = x[0] + uniform(rng) - 0.5;
+            if y[0] < 0.0 {
+                Proposed::new(f64::NEG_INFINITY, 0)
+            } else {
+                Proposed::SYMMETRIC
+            }
+        }
+        fn suitability(&self, _: &Vec<f64>) -> f64 {
+            self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            1.0
+        }
+    }
+
+    /// Under suitability selection, a candidate its component rejects outright is reported as
+    /// rejected (ratio `−∞`) without asking any component how well it suits the candidate; the
+    /// other candidates' suitabilities are asked as before.
+    #[test]
+    fn outright_rejections_skip_the_candidates_suitabilities() {
+        let asked = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        let component =
+            || -> Box<dyn Proposal<Vec<f64>> + Send + Sync> { Box::new(Counting(asked.clone())) };
+        let m: Mixture<'_, Vec<f64>> = Mixture::new(
+            vec![(1.0, component()), (1.0, component())],
+            MixtureRule::PerComponent,
+        )
+        .unwrap()
+        .with_selection(Selection::Suitability);
+        let mut rng = crate::rng::stream(1, 0);
+        let (x, mut y) = (vec![0.0], vec![0.0]);
+        let (mut rejected, mut kept) = (0, 0);
+        for _ in 0..200 {
+            let p = m.propose(&x, &mut y, &mut rng);
+            if y[0] < 0.0 {
+                assert_eq!(p.ln_ratio, f64::NEG_INFINITY);
+                rejected += 1;
+            } else {
+                assert_eq!(p.ln_ratio, 0.0);
+                kept += 1;
+            }
+        }
+        assert!(rejected > 50 && kept > 50, "{rejected} {kept}");
+        // Both components asked about x at every proposal, about y only when it was kept.
+        let asked = asked.load(std::sync::atomic::Ordering::Relaxed);
+        assert_eq!(asked, 2 * 200 + 2 * kept);
+    }
+
+    /// A symmetric step of ±0.5 that suits states with a positive first coordinate only.
+    struct PositiveWalk;
+
+    impl Proposal<Vec<f64>> for PositiveWalk {
+        fn propose(&self, x: &Vec<f64>, y: &mut Vec<f64>, rng: &mut ChainRng) -> Proposed {
+            y.clone_from(x);
+            y[0] = x[0] + uniform(rng) - 0.5;
+            Proposed::SYMMETRIC
+        }
+        fn suitability(&self, x: &Vec<f64>) -> f64 {
+            if x[0] > 0.0 { 1.0 } else { 0.0 }
+        }
+    }
+
+    /// Under suitability selection each component's ratio gains `ln P_k(y) − ln P_k(x)`: `ln 4`
+    /// for the walk that suits both sides of 0 (weight 1 of 4 on the positive half, all of it on
+    /// the other) when the candidate leaves the positive half, `−∞` for the positive-only walk,
+    /// and exactly 0 when both states suit the same moves.
+    #[test]
+    fn suitability_selection_adds_the_selection_ratio() {
+        let m: Mixture<'_, Vec<f64>> = Mixture::new(
+            vec![
+                (3.0, Box::new(PositiveWalk)),
+                (1.0, Box::new(GaussianRandomWalk::new(0.3).unwrap())),
+            ],
+            MixtureRule::PerComponent,
+        )
+        .unwrap()
+        .with_selection(Selection::Suitability);
+        let mut rng = crate::rng::stream(2, 0);
+        let mut y = vec![0.0];
+        let mut crossed = [0; 2];
+        for i in 0..2000 {
+            let x = vec![0.05 + 0.2 * (i % 3) as f64];
+            let p = m.propose(&x, &mut y, &mut rng);
+            let expected = m.ln_selection_of_kind(&y, p.kind) - m.ln_selection_of_kind(&x, p.kind);
+            if y[0] > 0.0 {
+                assert_eq!(p.ln_ratio, 0.0, "{x:?} → {y:?}");
+            } else if p.kind == 0 {
+                assert_eq!(p.ln_ratio, f64::NEG_INFINITY);
+                crossed[0] += 1;
+            } else {
+                assert!(
+                    (p.ln_ratio - expected).abs() < 1e-15 && (expected - 4f64.ln()).abs() < 1e-15
+                );
+                crossed[1] += 1;
+            }
+        }
+        assert!(crossed[0] > 20 && crossed[1] > 20, "{crossed:?}");
     }
 
     #[test]
