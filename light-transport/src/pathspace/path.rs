@@ -39,7 +39,7 @@ impl Clone for FullPath {
 /// The two walks of a path's evaluation ([`FullPath::strategies`]), kept with its chain state:
 /// a candidate that keeps a run of the path's vertices at either end resumes the walks where its
 /// own vertices begin ([`FullPath::strategies_resumed`]).
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub struct Walks {
     /// The walk from the light, `v_0 … v_k`.
     pub light: Vec<Traced>,
@@ -51,6 +51,26 @@ pub struct Walks {
     /// The position and delta flag of each vertex the walks were made from, `v_0` first: what a
     /// candidate's kept vertices are checked against before their entries are reused.
     vertices: Vec<(DVec3, bool)>,
+}
+
+impl Clone for Walks {
+    fn clone(&self) -> Self {
+        Self {
+            light: self.light.clone(),
+            camera: self.camera.clone(),
+            valid: self.valid,
+            vertices: self.vertices.clone(),
+        }
+    }
+
+    /// Keeps the vectors' storage (charted MLT copies its current state into its candidate at
+    /// every move; a derived `clone_from` would allocate the walks anew each time).
+    fn clone_from(&mut self, source: &Self) {
+        self.light.clone_from(&source.light);
+        self.camera.clone_from(&source.camera);
+        self.valid = source.valid;
+        self.vertices.clone_from(&source.vertices);
+    }
 }
 
 impl Walks {
