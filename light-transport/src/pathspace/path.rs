@@ -443,8 +443,9 @@ pub fn walk<'a>(
     walk_on(scene, n, at, mode, out, 1)
 }
 
-/// [`walk`] resumed from the walk `source = (entries, valid)` of a path whose first `kept`
-/// vertices are `at(0) … at(kept − 1)`; `None`, or fewer than two kept vertices: [`walk`].
+/// [`walk`] resumed from `source = (entries, valid, kept)`: the walk of a path (its first `valid`
+/// entries valid) whose first `kept` vertices are `at(0) … at(kept − 1)`; `None`, or fewer than
+/// two kept vertices: [`walk`].
 ///
 /// Step `i` of the walk reads vertices `i − 1`, `i` and `i + 1` only, so entries `0 … kept − 2`
 /// and the throughput, density and direction of entry `kept − 1` are the source's; the walk goes
@@ -566,7 +567,7 @@ mod tests {
     #[test]
     fn strategies_equal_connecting_retraced_subpaths() {
         let mut rng = stream(9, 0);
-        let (mut scratch, mut out) = (Walks::default(), Vec::new());
+        let (mut walks, mut out) = (Walks::default(), Vec::new());
         for name in builtin::all() {
             let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((32, 24))).unwrap();
             let mut sampler = IndependentStream::new(stream(10, 0));
@@ -583,7 +584,7 @@ mod tests {
                     continue;
                 }
                 let path = &state.path;
-                path.strategies(&scene, &mut scratch, &mut out);
+                path.strategies(&scene, &mut walks, &mut out);
                 let expected = strategies_by_connection(path, &scene);
                 let bits = |c: &[Option<Rgb>]| -> Vec<Option<[u64; 3]>> {
                     c.iter()
