@@ -153,13 +153,31 @@ impl LocalPair {
 
 /// A BSDF at one surface point. Two BSDFs are equal when their frames, geometric normals and
 /// lobes are (storage beyond the lobes in use is ignored).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct Bsdf {
     /// Shading frame (normal = shading normal; first tangent = anisotropy direction).
     pub frame: Frame,
     /// Geometric normal (decides on which side of the surface a direction lies).
     pub ng: DVec3,
     lobes: Lobes,
+}
+
+impl Clone for Bsdf {
+    fn clone(&self) -> Self {
+        Self {
+            frame: self.frame,
+            ng: self.ng,
+            lobes: self.lobes.clone(),
+        }
+    }
+
+    /// Keeps the lobes' storage and copies only those in use (a derived `clone_from` copies
+    /// every inline slot).
+    fn clone_from(&mut self, source: &Self) {
+        self.frame = source.frame;
+        self.ng = source.ng;
+        self.lobes.clone_from(&source.lobes);
+    }
 }
 
 /// A world direction in the local frame, normalised; `None` when degenerate.
@@ -255,7 +273,7 @@ impl Bsdf {
     }
 
     /// `wo` and `wi` in the local frame, when both lie on a side the two normals agree on.
-    #[inline]
+    #[inline(always)]
     fn locals(&self, wo: DVec3, wi: DVec3) -> Option<(DVec3, DVec3)> {
         let (lo, li) = (local(&self.frame, wo)?, local(&self.frame, wi)?);
         (self.sides_agree(wo, lo) && self.sides_agree(wi, li)).then_some((lo, li))

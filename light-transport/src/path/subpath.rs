@@ -4,7 +4,7 @@
 //! keeps its vertices, and a walk overwrites them field by field, rebuilding each BSDF where the
 //! previous walk left one.
 
-use super::vertex::{Vertex, VertexKind};
+use super::vertex::Vertex;
 use crate::geometry::SurfacePoint;
 use crate::math::DVec3;
 use crate::spectrum::Rgb;
@@ -54,24 +54,9 @@ impl Subpath {
     pub fn push_surface(&mut self, point: &SurfacePoint, wo: DVec3, beta: Rgb) -> &mut Vertex {
         let i = self.len;
         if let Some(v) = self.slots.get_mut(i) {
-            v.kind = VertexKind::Surface;
-            v.point = *point;
-            v.wo = wo;
-            v.beta = beta;
-            v.delta = false;
-            v.pdf_fwd = 0.0;
-            v.pdf_rev = 0.0;
+            v.set_surface(point, wo, beta);
         } else {
-            self.slots.push(Vertex {
-                kind: VertexKind::Surface,
-                point: *point,
-                wo,
-                bsdf: None,
-                beta,
-                delta: false,
-                pdf_fwd: 0.0,
-                pdf_rev: 0.0,
-            });
+            self.slots.push(Vertex::surface(point, wo, beta));
         }
         self.len += 1;
         &mut self.slots[i]

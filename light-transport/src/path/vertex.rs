@@ -22,7 +22,7 @@ pub enum VertexKind {
 }
 
 /// A vertex of a camera or light subpath.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct Vertex {
     /// Kind.
     pub kind: VertexKind,
@@ -47,7 +47,74 @@ pub struct Vertex {
     pub pdf_rev: f64,
 }
 
+impl Clone for Vertex {
+    fn clone(&self) -> Self {
+        Self {
+            kind: self.kind,
+            point: self.point,
+            wo: self.wo,
+            bsdf: self.bsdf.clone(),
+            beta: self.beta,
+            delta: self.delta,
+            pdf_fwd: self.pdf_fwd,
+            pdf_rev: self.pdf_rev,
+        }
+    }
+
+    /// Field by field, the BSDF into the storage this vertex has ([`Bsdf`]'s `clone_from` copies
+    /// only the lobes in use): a candidate path copies its source's vertices into its own. (The
+    /// destructuring makes a new field a compile error here until it is copied.)
+    fn clone_from(&mut self, source: &Self) {
+        let Self {
+            kind,
+            point,
+            wo,
+            bsdf,
+            beta,
+            delta,
+            pdf_fwd,
+            pdf_rev,
+        } = source;
+        self.kind = *kind;
+        self.point = *point;
+        self.wo = *wo;
+        self.bsdf.clone_from(bsdf);
+        self.beta = *beta;
+        self.delta = *delta;
+        self.pdf_fwd = *pdf_fwd;
+        self.pdf_rev = *pdf_rev;
+    }
+}
+
 impl Vertex {
+    /// A surface vertex at `point`, arrived at from `wo` with throughput `beta` (densities 0, not
+    /// delta, no BSDF yet).
+    pub fn surface(point: &SurfacePoint, wo: DVec3, beta: Rgb) -> Self {
+        Self {
+            kind: VertexKind::Surface,
+            point: *point,
+            wo,
+            bsdf: None,
+            beta,
+            delta: false,
+            pdf_fwd: 0.0,
+            pdf_rev: 0.0,
+        }
+    }
+
+    /// Make this vertex [`Vertex::surface`]`(point, wo, beta)` in place, except its BSDF: that
+    /// keeps its storage for the caller to rebuild ([`crate::scene::Scene::bsdf_into`]) before
+    /// anything reads it. Walks that write into kept slots use it (a vertex is large to copy).
+    pub fn set_surface(&mut self, point: &SurfacePoint, wo: DVec3, beta: Rgb) {
+        self.kind = VertexKind::Surface;
+        self.point = *point;
+        self.wo = wo;
+        self.beta = beta;
+        self.delta = false;
+        self.pdf_fwd = 0.0;
+        self.pdf_rev = 0.0;
+    }
+
     /// Position.
     #[inline]
     pub fn p(&self) -> DVec3 {

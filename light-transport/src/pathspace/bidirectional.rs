@@ -27,7 +27,7 @@
 
 use super::mutation::{Change, Mutation, Registration};
 use super::state::PathState;
-use super::walk::{extend, lens_endpoint, light_endpoint, with_vertex_buffers};
+use super::walk::{Toward, extend_in_place, lens_endpoint, light_endpoint};
 use crate::bsdf::TransportMode;
 use crate::metropolis::ImportanceKind;
 use crate::scene::Scene;
@@ -221,48 +221,81 @@ impl Bidirectional {
         let splits = Self::splits(k, d, n);
         let a = uniform_index(uniform(rng), splits);
         let b = n - a;
-        // Light part, walked in the candidate itself.
-        let light = &mut y.path.vertices;
-        light.clear();
-        if d.l >= 0 {
-            light.extend_from_slice(&xp.vertices[..=d.l as usize]);
-            if !extend(scene, light, a, TransportMode::Importance, rng) {
-                return Err(Failure::Failed);
-            }
+        // Both subpaths are walked in the candidate's own slots: it keeps x̄'s v_0 … v_l at its
+        // start and v_m … v_k at its end, with room for a light and b camera vertices between.
+        let kept_light = (d.l + 1) as usize;
+        let kept_camera = (k + 1).saturating_sub(d.m);
+        let s = kept_light + a;
+        let len = s + b + kept_camera;
+        y.path.splice_from(xp, kept_light, len, kept_camera);
+        let yv = &mut y.path.vertices;
+        let light_walked = if kept_light > 0 {
+            extend_in_place(
+                scene,
+                yv,
+                kept_light - 1,
+                a,
+                Toward::Camera,
+                TransportMode::Importance,
+                rng,
+            )
         } else if a > 0 {
-            light.push(light_endpoint(scene, rng).ok_or(Failure::Failed)?);
-            if !extend(scene, light, a - 1, TransportMode::Importance, rng) {
-                return Err(Failure::Failed);
-            }
+            yv[0] = light_endpoint(scene, rng).ok_or(Failure::Failed)?;
+            extend_in_place(
+                scene,
+                yv,
+                0,
+                a - 1,
+                Toward::Camera,
+                TransportMode::Importance,
+                rng,
+            )
+        } else {
+            true
+        };
+        if !light_walked {
+            return Err(Failure::Failed);
         }
-        let s = light.len();
-        with_vertex_buffers(|cam, _| {
-            // Camera part (walk order: lens first).
-            if d.m <= k {
-                cam.extend(xp.vertices[d.m..].iter().rev().cloned());
-                if !extend(scene, cam, b, TransportMode::Radiance, rng) {
-                    return Err(Failure::Failed);
-                }
-            } else {
-                cam.push(lens_endpoint(scene, rng).ok_or(Failure::Failed)?);
-                if !extend(scene, cam, b - 1, TransportMode::Radiance, rng) {
-                    return Err(Failure::Failed);
-                }
-            }
-            let change = Change {
-                l: d.l,
-                m: d.m,
-                added: n,
-                pivot: 0,
-            };
-            if y.path.close_with_camera_subpath(scene, cam).is_some() {
-                y.finish_candidate(scene, importance, x, change, s);
-            } else {
-                y.change = Some(change);
-                y.discard();
-            }
-            Ok(())
-        })
+        let camera_walked = if kept_camera > 0 {
+            extend_in_place(
+                scene,
+                yv,
+                s + b,
+                b,
+                Toward::Light,
+                TransportMode::Radiance,
+                rng,
+            )
+        } else {
+            // A new lens point and b − 1 vertices (b ≥ 1 when the lens was deleted).
+            let walked = b.checked_sub(1).ok_or(Failure::Failed)?;
+            yv[len - 1] = lens_endpoint(scene, rng).ok_or(Failure::Failed)?;
+            extend_in_place(
+                scene,
+                yv,
+                len - 1,
+                walked,
+                Toward::Light,
+                TransportMode::Radiance,
+                rng,
+            )
+        };
+        if !camera_walked {
+            return Err(Failure::Failed);
+        }
+        let change = Change {
+            l: d.l,
+            m: d.m,
+            added: n,
+            pivot: 0,
+        };
+        if y.path.closed_at(scene, s).is_some() {
+            y.finish_candidate(scene, importance, x, change, s);
+        } else {
+            y.change = Some(change);
+            y.discard();
+        }
+        Ok(())
     }
 
     /// `ln T̃` of making `y` from `x` by the change `c` (module docs; `−∞` when no deletion and

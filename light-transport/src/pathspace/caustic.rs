@@ -9,7 +9,7 @@ use super::perturbation::{
     same_specular_structure, scatters_diffusely,
 };
 use super::state::PathState;
-use super::walk::{angular_offset, trace};
+use super::walk::{angular_offset, trace_into};
 use crate::bsdf::TransportMode;
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
@@ -86,20 +86,22 @@ impl Mutation for Caustic<'_> {
         let k = xp.edges();
         let w_x = direction(&xp.vertices[i0], &xp.vertices[i0 + 1]);
         let mut w = angular_offset(w_x, self.settings.theta1, self.settings.theta2, rng);
-        let yp = &mut y.path;
-        yp.vertices.clear();
-        yp.vertices.extend_from_slice(&xp.vertices[..=i0]);
+        // ȳ is walked in place: a copy of x̄ (v_0 … v_{i0} and the lens point are kept) whose
+        // v'_{i0+1} … v'_{k−1} are traced into their slots.
+        let yv = &mut y.path.vertices;
+        yv.clone_from(&xp.vertices);
         for i in i0 + 1..k {
-            let last = yp.vertices.last().ok_or(Failure::Failed)?;
-            let mut v = trace(scene, last, w).ok_or(Failure::Failed)?;
-            if i < k - 1 {
-                w = follow_specular(&mut v, xp, i, TransportMode::Importance)?;
-            } else if !scatters_diffusely(&v) {
+            let (head, tail) = yv.split_at_mut(i);
+            let v = &mut tail[0];
+            if !trace_into(scene, &head[i - 1], w, v) {
                 return Err(Failure::Failed);
             }
-            yp.vertices.push(v);
+            if i < k - 1 {
+                w = follow_specular(v, xp, i, TransportMode::Importance)?;
+            } else if !scatters_diffusely(v) {
+                return Err(Failure::Failed);
+            }
         }
-        yp.vertices.push(xp.lens().clone());
         let change = Change {
             l: i0 as isize,
             m: k,

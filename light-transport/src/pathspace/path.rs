@@ -186,28 +186,50 @@ impl FullPath {
         if s > light.len() || t > camera.len() || t == 0 || s + t < 2 {
             return None;
         }
-        self.vertices.clear();
-        self.vertices.extend_from_slice(&light[..s]);
-        self.vertices.extend(camera[..t].iter().rev().cloned());
+        // Into the slots this path has, each vertex copied by `clone_from` (only the lobes in
+        // use; a cleared list refilled by `clone` copied every vertex whole, and moved it again).
+        let v = &mut self.vertices;
+        v.truncate(s + t);
+        for (i, from) in light[..s]
+            .iter()
+            .chain(camera[..t].iter().rev())
+            .enumerate()
+        {
+            match v.get_mut(i) {
+                Some(slot) => slot.clone_from(from),
+                None => v.push(from.clone()),
+            }
+        }
         self.mark_connection(scene, s)
     }
 
-    /// [`FullPath::set_from_subpaths`] for a light subpath already in place: this path's
-    /// vertices are the light subpath's first `s`, and the whole of `camera` (in walk order) is
-    /// moved onto them, emptying it. A mutation that walks the light side in the candidate itself
-    /// copies its vertices once instead of twice.
-    pub fn close_with_camera_subpath(
-        &mut self,
-        scene: &Scene,
-        camera: &mut Vec<Vertex>,
-    ) -> Option<()> {
-        let s = self.vertices.len();
-        if camera.is_empty() || s + camera.len() < 2 {
-            camera.clear();
+    /// [`FullPath::set_from_subpaths`] for subpaths walked in place: this path's first `s`
+    /// vertices are the light subpath, the rest the camera subpath (a mutation that walks in
+    /// its candidate's own slots copies no vertex out of a walk).
+    pub fn closed_at(&mut self, scene: &Scene, s: usize) -> Option<()> {
+        let n = self.vertices.len();
+        if s >= n || n < 2 {
             return None;
         }
-        self.vertices.extend(camera.drain(..).rev());
         self.mark_connection(scene, s)
+    }
+
+    /// Make this path a candidate of `len` vertices that keeps `source`'s first `head` and last
+    /// `tail` vertices, in place (each vertex copied into the storage of the one it replaces);
+    /// the `len − head − tail` slots between hold stale vertices for a walk to overwrite
+    /// ([`super::walk::trace_into`], [`super::walk::extend_in_place`]).
+    pub fn splice_from(&mut self, source: &FullPath, head: usize, len: usize, tail: usize) {
+        let (x, v) = (&source.vertices, &mut self.vertices);
+        assert!(
+            head + tail <= len && head.max(tail) <= x.len() && (len == 0 || !x.is_empty()),
+            "a splice keeps vertices the source has"
+        );
+        v.truncate(len);
+        if v.len() < len {
+            v.resize(len, x[0].clone());
+        }
+        v[..head].clone_from_slice(&x[..head]);
+        v[len - tail..].clone_from_slice(&x[x.len() - tail..]);
     }
 
     /// The end of [`FullPath::set_from_subpaths`] once the vertices are in place: the light
@@ -539,6 +561,37 @@ mod tests {
     use crate::sampler::IndependentStream;
     use crate::scene::builtin;
     use mcmc_core::rng::{stream, uniform};
+
+    /// A splice keeps the source's first `head` and last `tail` vertices, has `len`, and leaves
+    /// the slots between alone, whether the path grows, shrinks or keeps its length.
+    #[test]
+    fn a_splice_keeps_the_ends_it_names() {
+        let at = |i: usize| {
+            crate::pathspace::walk::endpoint(
+                VertexKind::Camera,
+                crate::geometry::SurfacePoint::flat(DVec3::splat(i as f64), DVec3::Z, i as u32),
+            )
+        };
+        let source = FullPath {
+            vertices: (0..6).map(at).collect(),
+        };
+        for (before, len) in [(0, 7), (3, 8), (6, 6), (9, 5)] {
+            let mut path = FullPath {
+                vertices: (100..100 + before).map(at).collect(),
+            };
+            path.splice_from(&source, 2, len, 3);
+            let p: Vec<f64> = path.vertices.iter().map(|v| v.p().x).collect();
+            assert_eq!(p.len(), len);
+            assert_eq!(p[..2], [0.0, 1.0]);
+            assert_eq!(p[len - 3..], [3.0, 4.0, 5.0]);
+            for (i, &x) in p.iter().enumerate().take(len - 3).skip(2) {
+                assert!(
+                    x == 0.0 || x == 100.0 + i as f64,
+                    "{before} → {len}: slot {i} is {x}"
+                );
+            }
+        }
+    }
 
     /// `C*_s` the long way: copy the path into its two subpaths, retrace each, connect strategy by
     /// strategy (what [`FullPath::strategies`] did before it kept one walk from each end).

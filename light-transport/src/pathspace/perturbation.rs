@@ -26,9 +26,7 @@
 
 use super::path::FullPath;
 use super::state::PathState;
-use super::walk::{
-    angular_offset, exponential_radius_pdf, pixel_offset, trace, with_vertex_buffers,
-};
+use super::walk::{angular_offset, exponential_radius_pdf, pixel_offset, trace_into};
 use crate::bsdf::TransportMode;
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
@@ -291,58 +289,49 @@ pub fn camera_side_propose(
     let k = xp.edges();
     let raster = x.raster().ok_or(Failure::NotApplicable)?;
     let moved = pixel_offset(raster, settings.r1, settings.r2(scene), rng);
-    let lens = xp.lens().clone();
     let cs = scene
         .camera
-        .ray_through(lens.p(), moved)
+        .ray_through(xp.lens().p(), moved)
         .ok_or(Failure::Failed)?;
-    // New vertices in camera order: lens, v'_{k−1}, v'_{k−2}, …
-    with_vertex_buffers(|cam, _| {
-        cam.push(lens);
-        let mut w = cs.ray.d;
-        let mut i = k - 1;
-        loop {
-            let mut v =
-                trace(scene, cam.last().ok_or(Failure::Failed)?, w).ok_or(Failure::Failed)?;
-            if xp.specular(i) {
-                w = follow_specular(&mut v, xp, i, TransportMode::Radiance)?;
-                cam.push(v);
-                i -= 1;
-                continue;
-            }
-            if i == 0 {
-                // The chain ends on the light: the hit must be an area light (strategy s = 0).
-                let (li, light) = scene.light_at(v.point.primitive).ok_or(Failure::Failed)?;
-                if light.is_delta_position() {
-                    return Err(Failure::Failed);
-                }
-                v.kind = VertexKind::Light { light: li as u32 };
-                cam.push(v);
-                break;
-            }
-            if !scatters_diffusely(&v) {
+    // ȳ is walked in place: it starts as a copy of x̄ (the light part v_0 … v_{s−1} and the lens
+    // point are kept), and v'_{k−1}, v'_{k−2}, … v'_s are traced into their slots from the lens.
+    let yv = &mut y.path.vertices;
+    yv.clone_from(&xp.vertices);
+    let mut w = cs.ray.d;
+    let mut i = k - 1;
+    loop {
+        let (head, tail) = yv.split_at_mut(i + 1);
+        let v = &mut head[i];
+        if !trace_into(scene, &tail[0], w, v) {
+            return Err(Failure::Failed);
+        }
+        if xp.specular(i) {
+            w = follow_specular(v, xp, i, TransportMode::Radiance)?;
+            i -= 1;
+            continue;
+        }
+        if i == 0 {
+            // The chain ends on the light: the hit must be an area light (strategy s = 0).
+            let (li, light) = scene.light_at(v.point.primitive).ok_or(Failure::Failed)?;
+            if light.is_delta_position() {
                 return Err(Failure::Failed);
             }
-            if i == chain.s {
-                cam.push(v);
-                break;
-            }
-            // Multi-chain: offset the direction leaving this vertex toward the next chain.
-            let w_x = direction(&xp.vertices[i], &xp.vertices[i - 1]);
-            w = angular_offset(w_x, settings.theta1, settings.theta2, rng);
-            cam.push(v);
-            i -= 1;
+            v.kind = VertexKind::Light { light: li as u32 };
+            break;
         }
-        // ȳ = kept light part v_0 … v_{s−1}, then the new camera part reversed.
-        let s = chain.s;
-        let yp = &mut y.path;
-        yp.vertices.clear();
-        yp.vertices.extend_from_slice(&xp.vertices[..s]);
-        yp.vertices.extend(cam.drain(..).rev());
-        yp.vertices[s].delta = false;
-        y.finish_candidate(scene, importance, x, chain.change(k), s);
-        Ok(())
-    })
+        if !scatters_diffusely(v) {
+            return Err(Failure::Failed);
+        }
+        if i == chain.s {
+            break;
+        }
+        // Multi-chain: offset the direction leaving this vertex toward the next chain.
+        let w_x = direction(&xp.vertices[i], &xp.vertices[i - 1]);
+        w = angular_offset(w_x, settings.theta1, settings.theta2, rng);
+        i -= 1;
+    }
+    y.finish_candidate(scene, importance, x, chain.change(k), chain.s);
+    Ok(())
 }
 
 /// `ln T̃` of a camera-side perturbation making `y` from `x` with record `c` (module docs).

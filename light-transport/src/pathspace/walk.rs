@@ -22,26 +22,34 @@ use std::f64::consts::TAU;
 /// Trace the ray leaving vertex `from` in unit direction `w`; the first hit as a scattering vertex
 /// (`wo = −w`, its BSDF, not delta).
 pub fn trace(scene: &Scene, from: &Vertex, w: DVec3) -> Option<Vertex> {
-    let ray = if from.on_surface(scene) {
+    let found = scene.intersect(&leaving(scene, from, w));
+    let hit = found.as_ref()?;
+    // The BSDF is built inside the vertex (a BSDF returned by value was copied twice more).
+    let mut v = Vertex::surface(&hit.point, -w, Rgb::BLACK);
+    scene.bsdf_into(&hit.point, &mut v.bsdf);
+    Some(v)
+}
+
+/// [`trace`] into the slot `out` (its BSDF rebuilt in the storage it has): a mutation that walks
+/// in its candidate's own vertices saves copying each new vertex out of the walk and into place.
+/// `false`, with `out` unchanged, when the ray escapes.
+pub fn trace_into(scene: &Scene, from: &Vertex, w: DVec3, out: &mut Vertex) -> bool {
+    let found = scene.intersect(&leaving(scene, from, w));
+    let Some(hit) = found.as_ref() else {
+        return false;
+    };
+    out.set_surface(&hit.point, -w, Rgb::BLACK);
+    scene.bsdf_into(&hit.point, &mut out.bsdf);
+    true
+}
+
+/// The ray leaving vertex `from` in direction `w` (off its surface, if it has one).
+fn leaving(scene: &Scene, from: &Vertex, w: DVec3) -> Ray {
+    if from.on_surface(scene) {
         Ray::leaving(&from.point, w)
     } else {
         Ray::new(from.p(), w)
-    };
-    let found = scene.intersect(&ray);
-    let hit = found.as_ref()?;
-    // The BSDF is built inside the vertex (a BSDF returned by value was copied twice more).
-    let mut v = Vertex {
-        kind: VertexKind::Surface,
-        bsdf: None,
-        point: hit.point,
-        wo: -w,
-        beta: Rgb::BLACK,
-        delta: false,
-        pdf_fwd: 0.0,
-        pdf_rev: 0.0,
-    };
-    scene.bsdf_into(&hit.point, &mut v.bsdf);
-    Some(v)
+    }
 }
 
 /// Point `wo` of the last vertex of `sub` (a subpath in walk order) at its predecessor.
@@ -62,7 +70,16 @@ pub fn sample_direction(
     rng: &mut ChainRng,
 ) -> Option<DVec3> {
     orient_last(sub);
-    let v = sub.last_mut()?;
+    sample_direction_at(scene, sub.last_mut()?, mode, rng)
+}
+
+/// [`sample_direction`] from `v`, whose `wo` is already set.
+fn sample_direction_at(
+    scene: &Scene,
+    v: &mut Vertex,
+    mode: TransportMode,
+    rng: &mut ChainRng,
+) -> Option<DVec3> {
     match v.kind {
         VertexKind::Light { light } => {
             let u = [uniform(rng), uniform(rng)];
@@ -90,25 +107,72 @@ pub fn sample_direction(
     }
 }
 
-/// Extend subpath `sub` by `n` vertices; `false` when the walk ends early (the ray escapes, or a
-/// BSDF cannot be sampled).
-pub fn extend(
+/// Which way a subpath walked inside a path's vertices runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Toward {
+    /// Up the indices: a light subpath `v_0 …`.
+    Camera,
+    /// Down the indices: a camera subpath `… v_k`.
+    Light,
+}
+
+/// Extend a subpath walked inside `path`'s own slots by `n` vertices, traced into the `n` slots
+/// beyond its end `from`: the subpath is `path[..=from]` walking [`Toward::Camera`], or
+/// `path[from..]` walking [`Toward::Light`] (so the candidate's new vertices are never copied out
+/// of a walk). Each step points the end's `wo` at its predecessor, samples the direction leaving it
+/// ([`sample_direction`]) and traces it; the new end is pointed likewise. `false` when the walk
+/// ends early (the ray escapes, or a BSDF cannot be sampled); the slots beyond are then stale.
+pub fn extend_in_place(
     scene: &Scene,
-    sub: &mut Vec<Vertex>,
+    path: &mut [Vertex],
+    from: usize,
     n: usize,
+    toward: Toward,
     mode: TransportMode,
     rng: &mut ChainRng,
 ) -> bool {
-    for _ in 0..n {
-        let Some(w) = sample_direction(scene, sub, mode, rng) else {
-            return false;
-        };
-        let Some(v) = sub.last().and_then(|last| trace(scene, last, w)) else {
-            return false;
-        };
-        sub.push(v);
+    let len = path.len();
+    let fits = match toward {
+        Toward::Camera => from + n < len,
+        Toward::Light => from < len && n <= from,
+    };
+    if !fits {
+        return false;
     }
-    orient_last(sub);
+    let orient = |path: &mut [Vertex], i: usize| {
+        let prev = match toward {
+            Toward::Camera => i.checked_sub(1),
+            Toward::Light => (i + 1 < len).then_some(i + 1),
+        };
+        if let Some(p) = prev {
+            path[i].wo = (path[p].p() - path[i].p()).normalize_or_zero();
+        }
+    };
+    let mut i = from;
+    for _ in 0..n {
+        orient(path, i);
+        let Some(w) = sample_direction_at(scene, &mut path[i], mode, rng) else {
+            return false;
+        };
+        let (end, slot) = match toward {
+            Toward::Camera => {
+                let (head, tail) = path.split_at_mut(i + 1);
+                (&head[i], &mut tail[0])
+            }
+            Toward::Light => {
+                let (head, tail) = path.split_at_mut(i);
+                (&tail[0], &mut head[i - 1])
+            }
+        };
+        if !trace_into(scene, end, w, slot) {
+            return false;
+        }
+        i = match toward {
+            Toward::Camera => i + 1,
+            Toward::Light => i - 1,
+        };
+    }
+    orient(path, i);
     true
 }
 
@@ -259,10 +323,147 @@ pub fn sample_path<S: SampleStream>(
 
 #[cfg(test)]
 mod tests {
-    use super::{endpoint, with_vertex_buffers};
-    use crate::geometry::SurfacePoint;
-    use crate::math::DVec3;
-    use crate::path::VertexKind;
+    use super::*;
+    use crate::scene::builtin;
+    use mcmc_core::rng::stream;
+
+    /// A walk in a list of its own, in walk order: the way the bidirectional mutation walked its
+    /// subpaths before it walked them in the candidate ([`extend_in_place`] must match it).
+    fn extend_in_list(
+        scene: &Scene,
+        sub: &mut Vec<Vertex>,
+        n: usize,
+        mode: TransportMode,
+        rng: &mut ChainRng,
+    ) -> bool {
+        for _ in 0..n {
+            let Some(w) = sample_direction(scene, sub, mode, rng) else {
+                return false;
+            };
+            let Some(v) = sub.last().and_then(|last| trace(scene, last, w)) else {
+                return false;
+            };
+            sub.push(v);
+        }
+        orient_last(sub);
+        true
+    }
+
+    fn same_vertex(a: &Vertex, b: &Vertex) -> bool {
+        a.kind == b.kind
+            && a.point == b.point
+            && a.wo == b.wo
+            && a.bsdf == b.bsdf
+            && a.delta == b.delta
+            && a.beta == b.beta
+    }
+
+    /// Subpaths walked inside a path's slots, both ways, from endpoints alone and from ends with
+    /// a predecessor, are the walks of a list of their own vertex for vertex (bit for bit, and
+    /// with the same random numbers drawn). Fails when the in-place walk points an end's `wo` at
+    /// the wrong neighbour.
+    #[test]
+    fn a_walk_in_a_path_is_the_walk_in_a_list() {
+        let (mut compared, mut walked) = (0, 0);
+        for name in builtin::all() {
+            let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((32, 24))).unwrap();
+            for trial in 0..300u64 {
+                for toward in [Toward::Camera, Toward::Light] {
+                    let (mode, start): (_, fn(&Scene, &mut ChainRng) -> Option<Vertex>) =
+                        match toward {
+                            Toward::Camera => (TransportMode::Importance, light_endpoint),
+                            Toward::Light => (TransportMode::Radiance, lens_endpoint),
+                        };
+                    let (first, more) = (trial as usize % 3, 1 + trial as usize % 4);
+                    let mut rng = stream(trial, 7);
+                    let Some(end) = start(&scene, &mut rng) else {
+                        continue;
+                    };
+                    // The first part in a list, then the rest in the list and in place.
+                    let mut list = vec![end];
+                    if !extend_in_list(&scene, &mut list, first, mode, &mut rng) {
+                        continue;
+                    }
+                    let len = list.len() + more + 2;
+                    let stale = list[0].clone();
+                    let mut path = vec![stale; len];
+                    let from = match toward {
+                        Toward::Camera => {
+                            path[..list.len()].clone_from_slice(&list);
+                            list.len() - 1
+                        }
+                        Toward::Light => {
+                            for (slot, v) in path.iter_mut().rev().zip(&list) {
+                                slot.clone_from(v);
+                            }
+                            len - list.len()
+                        }
+                    };
+                    let mut rng_list = rng.clone();
+                    let in_list = extend_in_list(&scene, &mut list, more, mode, &mut rng_list);
+                    let in_place =
+                        extend_in_place(&scene, &mut path, from, more, toward, mode, &mut rng);
+                    assert_eq!(in_list, in_place, "{name}, trial {trial}, {toward:?}");
+                    compared += 1;
+                    if !in_list {
+                        continue;
+                    }
+                    walked += 1;
+                    assert_eq!(uniform(&mut rng), uniform(&mut rng_list));
+                    let walk: Vec<&Vertex> = match toward {
+                        Toward::Camera => path[..list.len()].iter().collect(),
+                        Toward::Light => path[len - list.len()..].iter().rev().collect(),
+                    };
+                    for (i, (a, b)) in walk.iter().zip(&list).enumerate() {
+                        assert!(
+                            same_vertex(a, b),
+                            "{name}, trial {trial}, {toward:?}, vertex {i}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(
+            compared > 3000 && walked > 1000,
+            "{compared} compared, {walked} walked"
+        );
+    }
+
+    /// The walk refuses slots it does not have.
+    #[test]
+    fn a_walk_in_a_path_stays_inside_it() {
+        let scene = Scene::new(&builtin::builtin("cornell").unwrap(), Some((8, 8))).unwrap();
+        let mut rng = stream(1, 1);
+        let lens = lens_endpoint(&scene, &mut rng).unwrap();
+        let mut path = vec![lens; 3];
+        assert!(!extend_in_place(
+            &scene,
+            &mut path,
+            1,
+            2,
+            Toward::Light,
+            TransportMode::Radiance,
+            &mut rng
+        ));
+        assert!(!extend_in_place(
+            &scene,
+            &mut path,
+            1,
+            2,
+            Toward::Camera,
+            TransportMode::Importance,
+            &mut rng
+        ));
+        assert!(!extend_in_place(
+            &scene,
+            &mut path,
+            3,
+            0,
+            Toward::Light,
+            TransportMode::Radiance,
+            &mut rng
+        ));
+    }
 
     /// The lists come empty, keep their storage from one call to the next on a thread, and a
     /// nested call gets lists of its own rather than a borrow failure.
