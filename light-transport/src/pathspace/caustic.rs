@@ -9,7 +9,7 @@ use super::perturbation::{
     same_specular_structure, scatters_diffusely,
 };
 use super::state::PathState;
-use super::walk::{angular_offset, trace_into};
+use super::walk::{angular_offset, trace_between};
 use crate::bsdf::TransportMode;
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
@@ -91,11 +91,10 @@ impl Mutation for Caustic<'_> {
         let yv = &mut y.path.vertices;
         yv.clone_from(&xp.vertices);
         for i in i0 + 1..k {
-            let (head, tail) = yv.split_at_mut(i);
-            let v = &mut tail[0];
-            if !trace_into(scene, &head[i - 1], w, v) {
+            if !trace_between(scene, yv, i - 1, i, w) {
                 return Err(Failure::Failed);
             }
+            let v = &mut yv[i];
             if i < k - 1 {
                 w = follow_specular(v, xp, i, TransportMode::Importance)?;
             } else if !scatters_diffusely(v) {

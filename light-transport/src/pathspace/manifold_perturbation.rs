@@ -64,7 +64,7 @@ use super::mutation::{Change, Mutation, MutationContext, Registration};
 use super::path::arriving_throughput;
 use super::perturbation::{direction, follow_specular, refracts, scatters_diffusely};
 use super::state::PathState;
-use super::walk::trace;
+use super::walk::trace_between;
 use crate::bsdf::TransportMode;
 use crate::light::LightKind;
 use crate::manifold::{
@@ -462,7 +462,7 @@ impl<'a> ManifoldPerturbation<'a> {
     }
 
     /// The indices strictly between `from` and `to`, walking from `from`.
-    fn between(&self, from: usize, to: usize) -> Vec<usize> {
+    fn between(&self, from: usize, to: usize) -> smallvec::SmallVec<[usize; 16]> {
         if from < to {
             (from + 1..to).collect()
         } else {
@@ -647,14 +647,10 @@ impl<'a> ManifoldPerturbation<'a> {
             return Err(Failure::Failed);
         }
         let second = self.between(s.c, s.a);
-        let walked = self.walk_second_chain(xp, s.c, &second, s.a, &ya.point)?;
-        let yp = &mut y.path;
-        yp.vertices.clear();
-        yp.vertices.extend_from_slice(&xp.vertices);
-        yp.vertices[s.a] = ya;
-        for (&i, v) in second.iter().zip(walked) {
-            yp.vertices[i] = v;
-        }
+        let yv = &mut y.path.vertices;
+        yv.clone_from(&xp.vertices);
+        self.walk_second_chain(xp, s.c, &second, s.a, &ya.point, yv)?;
+        yv[s.a] = ya;
         let connection = if second.is_empty() { s.a.max(s.c) } else { 0 };
         y.finish_candidate(scene, self.importance, x, s.change(), connection);
         Ok(())
@@ -662,7 +658,7 @@ impl<'a> ManifoldPerturbation<'a> {
 
     /// Walk the specular vertices `second` (listed from `c` toward `b`) of `path` so that the
     /// chain from the fixed `x_c` ends at `target` instead of `x_b`, and back; the new specular
-    /// vertices (none when `second` is empty).
+    /// vertices go into their slots of `out` (nothing to do when `second` is empty).
     fn walk_second_chain(
         &self,
         path: &super::FullPath,
@@ -670,10 +666,11 @@ impl<'a> ManifoldPerturbation<'a> {
         second: &[usize],
         b: usize,
         target: &crate::geometry::SurfacePoint,
-    ) -> Result<Vec<Vertex>, Failure> {
+        out: &mut [Vertex],
+    ) -> Result<(), Failure> {
         let scene = self.scene;
         if second.is_empty() {
-            return Ok(Vec::new());
+            return Ok(());
         }
         let chain: Option<Vec<ChainVertex>> = std::iter::once((c, false))
             .chain(second.iter().map(|&i| (i, true)))
@@ -700,20 +697,13 @@ impl<'a> ManifoldPerturbation<'a> {
         };
         let forward = walked.ok_or(Failure::Failed)?;
         let m = forward.chain.len();
-        Ok(forward.chain[1..m - 1]
-            .iter()
-            .zip(second)
-            .map(|(cv, &i)| Vertex {
-                kind: VertexKind::Surface,
-                bsdf: scene.bsdf(&cv.point).ok(),
-                point: cv.point,
-                wo: DVec3::ZERO,
-                beta: Rgb::BLACK,
-                delta: path.specular(i),
-                pdf_fwd: 0.0,
-                pdf_rev: 0.0,
-            })
-            .collect())
+        for (cv, &i) in forward.chain[1..m - 1].iter().zip(second) {
+            let v = &mut out[i];
+            v.set_surface(&cv.point, DVec3::ZERO, Rgb::BLACK);
+            v.delta = path.specular(i);
+            scene.bsdf_into(&cv.point, &mut v.bsdf);
+        }
+        Ok(())
     }
 }
 
@@ -781,13 +771,24 @@ fn camera_side(scene: &Scene, path: &super::FullPath, hi: usize) -> Option<Rgb> 
 /// move of the endpoint on this direction's side (the lens toward the light when it has an
 /// aperture, an area light toward the eye).
 pub fn strategies(scene: &Scene, path: &super::FullPath, toward: Toward) -> Strategies {
+    strategies_of(scene, path, toward).collect()
+}
+
+/// Whether [`strategies`] has any: the mutation's suitability, which needs only the first.
+pub fn has_strategy(scene: &Scene, path: &super::FullPath, toward: Toward) -> bool {
+    strategies_of(scene, path, toward).next().is_some()
+}
+
+/// The strategies of [`strategies`] one by one, in its order.
+fn strategies_of<'p>(
+    scene: &'p Scene,
+    path: &'p super::FullPath,
+    toward: Toward,
+) -> impl Iterator<Item = Strategy> + 'p {
     let k = path.edges();
-    let mut out = Strategies::new();
-    if k < 2 {
-        return out;
-    }
-    let v = &path.vertices;
-    let next_non_specular = |from: usize| -> Option<usize> {
+    // No strategy on a path of fewer than two edges.
+    let ends = if k < 2 { 0..0 } else { 0..k + 1 };
+    let next_non_specular = move |from: usize| -> Option<usize> {
         let mut i = from;
         loop {
             i = match toward {
@@ -799,55 +800,47 @@ pub fn strategies(scene: &Scene, path: &super::FullPath, toward: Toward) -> Stra
             }
         }
     };
-    for a in 0..=k {
+    let directions = ends.clone().filter_map(move |a| {
         if path.specular(a) {
-            continue;
+            return None;
         }
-        let Some(b) = next_non_specular(a) else {
-            continue;
-        };
-        let Some(c) = next_non_specular(b) else {
-            continue;
-        };
+        let b = next_non_specular(a)?;
+        let c = next_non_specular(b)?;
         let s = Strategy {
             a,
             b,
             c,
             position: false,
         };
-        if valid(scene, path, &s) {
-            out.push(s);
-        }
-    }
+        valid(scene, path, &s).then_some(s)
+    });
+    let any = !ends.is_empty();
     // Position moves of a thin lens's point, toward the light.
-    if toward == Toward::Light
-        && scene.camera.lens_radius > 0.0
-        && let Some(c) = next_non_specular(k)
-    {
-        out.push(Strategy {
+    let lens = (any && toward == Toward::Light && scene.camera.lens_radius > 0.0)
+        .then(|| next_non_specular(k))
+        .flatten()
+        .map(move |c| Strategy {
             a: k,
             b: k,
             c,
             position: true,
         });
-    }
     // Position moves of an area light's point, toward the eye.
-    let area_light = matches!(
-        v[0].kind,
-        VertexKind::Light { light } if !scene.lights[light as usize].is_delta_position()
-    );
-    if toward == Toward::Eye
-        && area_light
-        && let Some(c) = next_non_specular(0)
-    {
-        out.push(Strategy {
+    let area_light = any
+        && matches!(
+            path.vertices[0].kind,
+            VertexKind::Light { light } if !scene.lights[light as usize].is_delta_position()
+        );
+    let light = (toward == Toward::Eye && area_light)
+        .then(|| next_non_specular(0))
+        .flatten()
+        .map(|c| Strategy {
             a: 0,
             b: 0,
             c,
             position: true,
         });
-    }
-    out
+    directions.chain(lens).chain(light)
 }
 
 /// Whether `s` is a strategy on `path`: a direction move's `x_b` is a scattering surface (not an
@@ -1058,7 +1051,7 @@ impl Mutation for ManifoldPerturbation<'_> {
     }
 
     fn suitability(&self, x: &PathState) -> f64 {
-        (!self.strategies(x).is_empty()) as u8 as f64
+        has_strategy(self.scene, &x.path, self.toward) as u8 as f64
     }
 
     fn propose(&self, x: &PathState, rng: &mut ChainRng, y: &mut PathState) -> Result<(), Failure> {
@@ -1081,40 +1074,32 @@ impl Mutation for ManifoldPerturbation<'_> {
             Toward::Light => TransportMode::Radiance,
             Toward::Eye => TransportMode::Importance,
         };
-        // The first chain: trace and follow the specular vertices to x'_b.
-        let mut first: Vec<Vertex> = Vec::new();
+        // ȳ is walked in place: a copy of x̄ whose first chain (`path_b`, then x'_b) is traced
+        // into its slots from x_a, and whose second chain is walked from x_c to x'_b.
+        let yv = &mut y.path.vertices;
+        yv.clone_from(&xp.vertices);
         let path_b = self.between(s.a, s.b);
+        let mut from = s.a;
         for &i in path_b.iter().chain(std::iter::once(&s.b)) {
-            let from = first.last().unwrap_or(&xp.vertices[s.a]);
-            let mut v = trace(scene, from, w).ok_or(Failure::Failed)?;
+            if !trace_between(scene, yv, from, i, w) {
+                return Err(Failure::Failed);
+            }
+            let v = &mut yv[i];
             if i == s.b {
-                if !scatters_diffusely(&v) {
+                if !scatters_diffusely(v) {
                     return Err(Failure::Failed);
                 }
             } else if xp.specular(i) {
-                w = follow_specular(&mut v, xp, i, mode)?;
+                w = follow_specular(v, xp, i, mode)?;
             } else {
-                w = self.follow_offset(&mut v, xp, i)?;
+                w = self.follow_offset(v, xp, i)?;
             }
-            first.push(v);
+            from = i;
         }
-        let y_b = first.last().ok_or(Failure::Failed)?.clone();
-        // The second chain: walk it from x_c to x'_b (and back).
         let second = self.between(s.c, s.b);
-        let walked = self.walk_second_chain(xp, s.c, &second, s.b, &y_b.point)?;
+        let target = yv[s.b].point;
+        self.walk_second_chain(xp, s.c, &second, s.b, &target, yv)?;
         let connection = if second.is_empty() { s.b.max(s.c) } else { 0 };
-        // ȳ: x̄ with the first chain at `path_b`, x'_b, and the walked chain at `second`.
-        let yp = &mut y.path;
-        yp.vertices.clear();
-        yp.vertices.extend_from_slice(&xp.vertices);
-        for (&i, v) in path_b.iter().zip(&first) {
-            yp.vertices[i] = v.clone();
-        }
-        yp.vertices[s.b] = y_b;
-        yp.vertices[s.b].delta = false;
-        for (&i, v) in second.iter().zip(walked) {
-            yp.vertices[i] = v;
-        }
         y.finish_candidate(scene, self.importance, x, s.change(), connection);
         Ok(())
     }
@@ -1127,5 +1112,110 @@ impl Mutation for ManifoldPerturbation<'_> {
             }
             _ => f64::NEG_INFINITY,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pathspace::walk::sample_path;
+    use crate::sampler::IndependentStream;
+    use crate::scene::{Projection, builtin};
+    use mcmc_core::rng::stream;
+
+    /// The mutation's suitability (whether a path has a strategy, from the first one found) agrees
+    /// with the whole list, and the list is the direct enumeration of its definition, on paths of
+    /// every length and strategy in every built-in scene, both directions. Fails when the lazy list
+    /// drops the position moves or lists a strategy on a path too short for any.
+    #[test]
+    fn the_first_strategy_decides_suitability_as_the_list_does() {
+        let mut rng = stream(3, 0);
+        let (mut paths, mut with, mut position) = (0, 0, 0);
+        // Every built-in, as it is (a pinhole) and with a thin lens (its position moves).
+        let names = builtin::all();
+        let scenes = names.iter().flat_map(|&name| {
+            [0.0, 0.02].map(|radius| {
+                let mut desc = builtin::builtin(name).unwrap();
+                if let Some(camera) = desc.camera.as_mut() {
+                    let Projection::Perspective { lens_radius, .. } = &mut camera.projection;
+                    *lens_radius = radius;
+                }
+                (name, Scene::new(&desc, Some((32, 24))).unwrap())
+            })
+        });
+        for (name, scene) in scenes {
+            let mut sampler = IndependentStream::new(stream(4, 0));
+            let mut state = PathState::default();
+            for _ in 0..3000 {
+                let k = 1 + (uniform(&mut rng) * 6.0) as usize;
+                let s = ((uniform(&mut rng) * (k + 2) as f64) as usize).min(k + 1);
+                sampler.new_sample();
+                if sample_path(&scene, k, s, &mut sampler, &mut state).is_none() {
+                    continue;
+                }
+                let path = &state.path;
+                paths += 1;
+                for toward in [Toward::Light, Toward::Eye] {
+                    let list = strategies(&scene, path, toward);
+                    assert_eq!(has_strategy(&scene, path, toward), !list.is_empty());
+                    with += !list.is_empty() as usize;
+                    position += list.iter().filter(|s| s.position).count();
+                    // The definition, directly: direction moves from every non-specular x_a
+                    // whose next two non-specular vertices exist, then the position move.
+                    let nns = |from: usize| -> Option<usize> {
+                        let mut order: Vec<usize> = match toward {
+                            Toward::Light => (0..from).rev().collect(),
+                            Toward::Eye => (from + 1..=k).collect(),
+                        };
+                        order.retain(|&i| !path.specular(i));
+                        order.first().copied()
+                    };
+                    let mut expected: Vec<Strategy> = Vec::new();
+                    if k >= 2 {
+                        for a in (0..=k).filter(|&a| !path.specular(a)) {
+                            if let Some(b) = nns(a)
+                                && let Some(c) = nns(b)
+                            {
+                                let st = Strategy {
+                                    a,
+                                    b,
+                                    c,
+                                    position: false,
+                                };
+                                if valid(&scene, path, &st) {
+                                    expected.push(st);
+                                }
+                            }
+                        }
+                        let light_moves = matches!(path.vertices[0].kind,
+                            VertexKind::Light { light } if !scene.lights[light as usize].is_delta_position());
+                        let end = match toward {
+                            Toward::Light if scene.camera.lens_radius > 0.0 => Some(k),
+                            Toward::Eye if light_moves => Some(0),
+                            _ => None,
+                        };
+                        if let Some(a) = end
+                            && let Some(c) = nns(a)
+                        {
+                            expected.push(Strategy {
+                                a,
+                                b: a,
+                                c,
+                                position: true,
+                            });
+                        }
+                    }
+                    assert_eq!(
+                        list.as_slice(),
+                        expected.as_slice(),
+                        "{name}, k = {k}, {toward:?}"
+                    );
+                }
+            }
+        }
+        assert!(
+            paths > 3000 && with > 5000 && position > 3000,
+            "{paths} {with} {position}"
+        );
     }
 }

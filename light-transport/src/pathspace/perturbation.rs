@@ -26,7 +26,7 @@
 
 use super::path::FullPath;
 use super::state::PathState;
-use super::walk::{angular_offset, exponential_radius_pdf, pixel_offset, trace_into};
+use super::walk::{angular_offset, exponential_radius_pdf, pixel_offset, trace_between};
 use crate::bsdf::TransportMode;
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
@@ -300,11 +300,10 @@ pub fn camera_side_propose(
     let mut w = cs.ray.d;
     let mut i = k - 1;
     loop {
-        let (head, tail) = yv.split_at_mut(i + 1);
-        let v = &mut head[i];
-        if !trace_into(scene, &tail[0], w, v) {
+        if !trace_between(scene, yv, i + 1, i, w) {
             return Err(Failure::Failed);
         }
+        let v = &mut yv[i];
         if xp.specular(i) {
             w = follow_specular(v, xp, i, TransportMode::Radiance)?;
             i -= 1;

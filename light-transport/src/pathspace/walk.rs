@@ -43,6 +43,18 @@ pub fn trace_into(scene: &Scene, from: &Vertex, w: DVec3, out: &mut Vertex) -> b
     true
 }
 
+/// [`trace_into`] within one path: from its vertex `from` into its slot `to` (`from ≠ to`).
+pub fn trace_between(scene: &Scene, path: &mut [Vertex], from: usize, to: usize, w: DVec3) -> bool {
+    let (end, slot) = if from < to {
+        let (head, tail) = path.split_at_mut(to);
+        (&head[from], &mut tail[0])
+    } else {
+        let (head, tail) = path.split_at_mut(from);
+        (&tail[0], &mut head[to])
+    };
+    trace_into(scene, end, w, slot)
+}
+
 /// The ray leaving vertex `from` in direction `w` (off its surface, if it has one).
 fn leaving(scene: &Scene, from: &Vertex, w: DVec3) -> Ray {
     if from.on_surface(scene) {
@@ -154,23 +166,14 @@ pub fn extend_in_place(
         let Some(w) = sample_direction_at(scene, &mut path[i], mode, rng) else {
             return false;
         };
-        let (end, slot) = match toward {
-            Toward::Camera => {
-                let (head, tail) = path.split_at_mut(i + 1);
-                (&head[i], &mut tail[0])
-            }
-            Toward::Light => {
-                let (head, tail) = path.split_at_mut(i);
-                (&tail[0], &mut head[i - 1])
-            }
-        };
-        if !trace_into(scene, end, w, slot) {
-            return false;
-        }
-        i = match toward {
+        let next = match toward {
             Toward::Camera => i + 1,
             Toward::Light => i - 1,
         };
+        if !trace_between(scene, path, i, next, w) {
+            return false;
+        }
+        i = next;
     }
     orient(path, i);
     true
