@@ -1105,12 +1105,19 @@ impl Mutation for ManifoldPerturbation<'_> {
     }
 
     fn ln_density(&self, x: &PathState, y: &PathState, change: Change) -> f64 {
-        let list = self.strategies(x);
-        match self.strategy_of(change, x.path.edges()) {
-            Some(s) if list.iter().any(|c| c.a == s.a && c.position == s.position) => {
-                self.ln_density_of(x, y, &s, list.len())
-            }
-            _ => f64::NEG_INFINITY,
+        let Some(s) = self.strategy_of(change, x.path.edges()) else {
+            return f64::NEG_INFINITY;
+        };
+        // How many strategies x̄ has, and whether the change's is one: one pass, no list.
+        let (mut count, mut listed) = (0, false);
+        for c in strategies_of(self.scene, &x.path, self.toward) {
+            count += 1;
+            listed |= c.a == s.a && c.position == s.position;
+        }
+        if listed {
+            self.ln_density_of(x, y, &s, count)
+        } else {
+            f64::NEG_INFINITY
         }
     }
 }
