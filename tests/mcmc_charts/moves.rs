@@ -786,3 +786,31 @@ fn independence_samplers_in_a_chart_keep_its_law() {
     assert!(per_component.passed, "{per_component}");
     assert!(!forgot.passed, "{forgot}");
 }
+
+/// A point move whose proposal fails leaves the current point in the candidate, whatever partial
+/// point the proposal wrote there (a renderer's failed path mutation leaves a fragment of a path;
+/// charted MLT reads a candidate's path length when a later large step's map fails too). Fails
+/// without the restoring copy in `PointMove::propose`.
+#[test]
+fn a_failed_point_move_leaves_the_current_point_in_the_candidate() {
+    use mcmc_charts::moves::{PointMove, Refresh};
+    use mcmc_core::{Failure, Proposed};
+    struct WritesAndFails;
+    impl Proposal<P2> for WritesAndFails {
+        fn propose(&self, _x: &P2, y: &mut P2, _rng: &mut ChainRng) -> Proposed {
+            *y = [0.123, 0.456];
+            Proposed::failed(0, Failure::Failed)
+        }
+    }
+    let (atlas, f) = broken_fixture();
+    let t = target(&atlas, &f, TargetKind::Weighted);
+    let mut rng = stream(5, 0);
+    for k in [0, 1] {
+        let x = in_chart(&t, k, [0.3, 0.6], &mut rng);
+        let mut y = in_chart(&t, k, [0.7, 0.2], &mut rng);
+        let p =
+            PointMove::new(&t, WritesAndFails, Refresh::KeepChart).propose(&x, &mut y, &mut rng);
+        assert!(p.failure.is_some());
+        assert_eq!(y.x, x.x, "chart {k}");
+    }
+}

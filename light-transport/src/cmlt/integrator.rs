@@ -66,9 +66,12 @@ impl Recordable for CmltState {
         &self.x.contribution
     }
 
-    /// Path length − 1. A chain of `k` edges keeps every state and candidate it holds at `k`
-    /// edges, valid or not: every move writes paths of its own length, and a failed technique
-    /// walk leaves the candidate's path as it was.
+    /// Path length − 1. A failed technique walk leaves the candidate's path as it was, so a
+    /// failed large step counts in the group of the path the candidate last held: the chain's
+    /// own, since the chart moves keep a chain's length and a failed path-space move leaves the
+    /// current path in the candidate ([`mcmc_charts::moves::PointMove`]). One case is left: a
+    /// path-space move that changes the length (the bidirectional mutation), rejected, then a
+    /// failed large step counts in the rejected path's group (`--pathspace` above 0 only).
     fn group(&self) -> usize {
         self.x.path.edges().saturating_sub(1)
     }

@@ -12,7 +12,7 @@
 
 use super::mutation::{Change, Mutation, Registration};
 use super::state::PathState;
-use super::walk::{lens_endpoint, sample_direction, trace};
+use super::walk::{lens_endpoint, sample_direction, trace, with_vertex_buffers};
 use crate::bsdf::TransportMode;
 use crate::metropolis::ImportanceKind;
 use crate::path::Vertex;
@@ -75,36 +75,39 @@ impl Mutation for LensSubpath<'_> {
         let scene = self.scene;
         let xp = &x.path;
         let j = self.start(x).ok_or(Failure::NotApplicable)?;
-        let mut cam: Vec<Vertex> = Vec::with_capacity(xp.edges() + 1);
-        cam.push(lens_endpoint(scene, rng).ok_or(Failure::Failed)?);
-        loop {
-            // Vertices so far: j kept + the new camera part; at most max_edges + 1.
-            if j + cam.len() > self.max_edges {
-                return Err(Failure::Failed);
+        // The new camera side is walked in a per-thread list (its length is known only when
+        // the walk stops), then moved onto the kept light side.
+        with_vertex_buffers(|cam, _| {
+            cam.push(lens_endpoint(scene, rng).ok_or(Failure::Failed)?);
+            loop {
+                // Vertices so far: j kept + the new camera part; at most max_edges + 1.
+                if j + cam.len() > self.max_edges {
+                    return Err(Failure::Failed);
+                }
+                let w = sample_direction(scene, cam, TransportMode::Radiance, rng)
+                    .ok_or(Failure::Failed)?;
+                let last = cam.last().ok_or(Failure::Failed)?;
+                let v = trace(scene, last, w).ok_or(Failure::Failed)?;
+                let stop = !delta_only(&v);
+                cam.push(v);
+                if stop {
+                    break;
+                }
             }
-            let w = sample_direction(scene, &mut cam, TransportMode::Radiance, rng)
-                .ok_or(Failure::Failed)?;
-            let last = cam.last().ok_or(Failure::Failed)?;
-            let v = trace(scene, last, w).ok_or(Failure::Failed)?;
-            let stop = !delta_only(&v);
-            cam.push(v);
-            if stop {
-                break;
-            }
-        }
-        let added = cam.len();
-        let yp = &mut y.path;
-        yp.vertices.clear();
-        yp.vertices.extend_from_slice(&xp.vertices[..j]);
-        yp.vertices.extend(cam.into_iter().rev());
-        let change = Change {
-            l: j as isize - 1,
-            m: xp.edges() + 1,
-            added,
-            pivot: 0,
-        };
-        y.finish_candidate(scene, self.importance, x, change, j);
-        Ok(())
+            let added = cam.len();
+            let yp = &mut y.path;
+            yp.vertices.clear();
+            yp.vertices.extend_from_slice(&xp.vertices[..j]);
+            yp.vertices.extend(cam.drain(..).rev());
+            let change = Change {
+                l: j as isize - 1,
+                m: xp.edges() + 1,
+                added,
+                pivot: 0,
+            };
+            y.finish_candidate(scene, self.importance, x, change, j);
+            Ok(())
+        })
     }
 
     fn ln_density(&self, x: &PathState, y: &PathState, c: Change) -> f64 {

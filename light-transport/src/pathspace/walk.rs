@@ -280,11 +280,12 @@ pub fn cone_pdf(axis: DVec3, w: DVec3, beta: f64) -> f64 {
     }
 }
 
-/// Run `f` with two empty vertex lists whose storage is kept per thread: the mutations that build
-/// a candidate's new vertices in lists of their own (the bidirectional mutation's two subpaths, a
-/// perturbation's camera side) would otherwise allocate them at every proposal. The lists are
-/// taken out of the thread's slot for the call, so a nested call gets fresh ones instead of
-/// failing.
+/// Run `f` with two empty vertex lists whose storage is kept per thread: a mutation that builds
+/// a candidate's new vertices in a list of its own (the lens-subpath mutation, whose walk stops
+/// where it finds a non-specular surface, so its length is not known before) would otherwise
+/// allocate it at every proposal; mutations that know their new vertices' count walk in the
+/// candidate itself ([`extend_in_place`]). The lists are taken out of the thread's slot for the
+/// call, so a nested call gets fresh ones instead of failing.
 pub fn with_vertex_buffers<R>(f: impl FnOnce(&mut Vec<Vertex>, &mut Vec<Vertex>) -> R) -> R {
     thread_local! {
         static LISTS: std::cell::Cell<(Vec<Vertex>, Vec<Vertex>)> =

@@ -39,6 +39,10 @@ impl<X: Clone, I: Integrand<X>, C: Chart<X>, P: Proposal<X>> Proposal<ChartState
         }
         let p = self.proposal.propose(&x.x, &mut y.x, rng);
         if p.failure.is_some() {
+            // A failed proposal may leave a partial point behind; the candidate is the current
+            // point again, so that what the chain reads of a failed candidate later (a renderer's
+            // path length, when a large step's map fails too) is the chain's, not a fragment's.
+            y.x.clone_from(&x.x);
             return p;
         }
         self.target.refresh_point(y);
