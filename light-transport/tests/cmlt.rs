@@ -691,13 +691,22 @@ impl Observer<CmltState> for LargeSteps<'_> {
 /// weight the bootstrap gives a sample at the same chart and coordinates (0 when the walk
 /// failed). Checked over 4 000 mutations of a chain of every length on `door`, where walks
 /// mostly fail (connections through the gap are mostly occluded), and on `cornell`, where they
-/// mostly succeed.
+/// mostly succeed; without and with path-space moves (whose failed or rejected candidates of
+/// other lengths a failed walk's sample once took its group from: the test fails then).
 #[test]
 fn large_step_candidates_are_bootstrap_samples_of_their_length_and_chart() {
     let (mut made, mut failed) = (0, 0);
-    for name in ["door", "cornell"] {
+    // With path-space moves too: a failed or rejected one leaves a path of another length in
+    // the candidate, which a failed large step's sample must not take for its own.
+    let runs = [
+        ("door", 0.0),
+        ("cornell", 0.0),
+        ("door", 0.4),
+        ("cornell", 0.4),
+    ];
+    for (name, pathspace) in runs {
         let scene = scene(name);
-        let m = cmlt(&scene, 0.0, 0.0);
+        let m = cmlt(&scene, 0.0, pathspace);
         for k in 1..=MAX_EDGES {
             let atlas = m.atlas(&scene, k);
             let target = Cmlt::target(&atlas);
@@ -718,10 +727,10 @@ fn large_step_candidates_are_bootstrap_samples_of_their_length_and_chart() {
             };
             m.mutate(&scene, &mut chain, 4000, &mut rng, &mut observer);
             println!(
-                "{name}, k = {k}: {} large steps, {} failed walks",
+                "{name}, path-space moves {pathspace}, k = {k}: {} large steps, {} failed walks",
                 observer.made, observer.failed
             );
-            assert!(observer.made > 800, "{}", observer.made);
+            assert!(observer.made > 400, "{}", observer.made);
             made += observer.made;
             failed += observer.failed;
         }

@@ -66,14 +66,11 @@ impl Recordable for CmltState {
         &self.x.contribution
     }
 
-    /// Path length − 1. A failed technique walk leaves the candidate's path as it was, so a
-    /// failed large step counts in the group of the path the candidate last held: the chain's
-    /// own, since the chart moves keep a chain's length and a failed path-space move leaves the
-    /// current path in the candidate ([`mcmc_charts::moves::PointMove`]). One case is left: a
-    /// path-space move that changes the length (the bidirectional mutation), rejected, then a
-    /// failed large step counts in the rejected path's group (`--pathspace` above 0 only).
+    /// Path length − 1: the length the candidate was drawn for ([`PathState::drawn_edges`]; a
+    /// failed technique walk records its chart's), never a fragment a failed or rejected move
+    /// left behind.
     fn group(&self) -> usize {
-        self.x.path.edges().saturating_sub(1)
+        self.x.drawn_edges().saturating_sub(1)
     }
 
     /// A large step's candidate: coordinates uniform in the chain's chart `s`, so a sample of

@@ -271,6 +271,8 @@ impl Chart<PathState> for TechniqueChart<'_> {
         }
         let mut stream = ReplayStream::new(&u[..nc], &u[nc..], &[]);
         if sample_path(self.scene, self.k, self.s, &mut stream, x).is_none() {
+            // The candidate of a failed large step counts in this chart's length.
+            x.fail_walk(self.k);
             return false;
         }
         x.evaluate(self.scene, self.importance, 1.0) && x.strategy_importance(self.s) > 0.0

@@ -122,10 +122,7 @@ impl Recordable for PathState {
     /// weight `(k + 1) I` of group `k − 1`. A new path whose walk failed has no vertices left
     /// but carries its length in its change (`added = k + 1` vertices), and weight 0.
     fn independent_weight(&self) -> BootstrapSample {
-        let k = match (self.path.vertices.is_empty(), self.change) {
-            (true, Some(c)) => c.added.saturating_sub(1),
-            _ => self.path.edges(),
-        };
+        let k = self.drawn_edges();
         BootstrapSample {
             group: k.saturating_sub(1),
             stratum: 0,
@@ -143,6 +140,30 @@ thread_local! {
 }
 
 impl PathState {
+    /// The number of edges this path was drawn with: its own, or, for a path whose walk failed
+    /// (no vertices left), the length its change records (`added = k + 1` vertices).
+    pub fn drawn_edges(&self) -> usize {
+        match (self.path.vertices.is_empty(), self.change) {
+            (true, Some(c)) => c.added.saturating_sub(1),
+            _ => self.path.edges(),
+        }
+    }
+
+    /// Mark this state as a walk of `k` edges that failed: no vertices, nothing carried, and the
+    /// length in its change ([`PathState::drawn_edges`]), so that what is read of it later (the
+    /// bootstrap group of a failed independent sample) is the length it was drawn for, not what
+    /// the state held before.
+    pub fn fail_walk(&mut self, k: usize) {
+        self.path.vertices.clear();
+        self.discard();
+        self.change = Some(Change {
+            l: -1,
+            m: 0,
+            added: k + 1,
+            pivot: 0,
+        });
+    }
+
     /// Evaluate the path: per-strategy importances and the recorded colour `scale · f / Σ_s p_s`.
     /// Returns whether the path carries light (some strategy has a positive contribution).
     pub fn evaluate(&mut self, scene: &Scene, importance: ImportanceKind, scale: f64) -> bool {
