@@ -88,8 +88,8 @@ impl NewPath {
     }
 
     /// A path of `k` edges from the numbers of `stream` (strategy from the technique stream),
-    /// evaluated; `false` (and a cleared state) when it carries no light. Deterministic in the
-    /// stream. Its importance weight within its length is `(k + 1) I(f / Σ_s p_s)`.
+    /// evaluated; `false` when it carries no light (a walk that failed leaves the state marked
+    /// by [`PathState::fail_walk`]). Deterministic in the stream. Its importance weight within its length is `(k + 1) I(f / Σ_s p_s)`.
     pub fn sample<S: SampleStream>(
         scene: &Scene,
         importance: ImportanceKind,
@@ -101,8 +101,7 @@ impl NewPath {
         stream.seek(layout::TECHNIQUE);
         let s = uniform_index(stream.next_1d(), k + 1);
         if sample_path(scene, k, s, stream, out).is_none() {
-            out.path.vertices.clear();
-            out.discard();
+            out.fail_walk(k);
             return false;
         }
         out.evaluate(scene, importance, 1.0)
