@@ -440,33 +440,12 @@ mod tests {
         let mut rng = stream(1, 1);
         let lens = lens_endpoint(&scene, &mut rng).unwrap();
         let mut path = vec![lens; 3];
-        assert!(!extend_in_place(
-            &scene,
-            &mut path,
-            1,
-            2,
-            Toward::Light,
-            TransportMode::Radiance,
-            &mut rng
-        ));
-        assert!(!extend_in_place(
-            &scene,
-            &mut path,
-            1,
-            2,
-            Toward::Camera,
-            TransportMode::Importance,
-            &mut rng
-        ));
-        assert!(!extend_in_place(
-            &scene,
-            &mut path,
-            3,
-            0,
-            Toward::Light,
-            TransportMode::Radiance,
-            &mut rng
-        ));
+        let mut refused = |from, n, toward, mode| {
+            !extend_in_place(&scene, &mut path, from, n, toward, mode, &mut rng)
+        };
+        assert!(refused(1, 2, Toward::Light, TransportMode::Radiance));
+        assert!(refused(1, 2, Toward::Camera, TransportMode::Importance));
+        assert!(refused(3, 0, Toward::Light, TransportMode::Radiance));
     }
 
     /// The lists come empty, keep their storage from one call to the next on a thread, and a
