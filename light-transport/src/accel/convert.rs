@@ -1,28 +1,36 @@
-//! Conversion of a binary BVH into a compressed wide BVH (Ylitie, Karras and Laine 2017, §3:
-//! the SAH-based collapse of a binary tree into nodes of up to eight children, with leaves of up
-//! to three primitives, and the quantised child boxes of §3.1), producing exactly the tree that
-//! obvhs's `bvh2_to_cwbvh(bvh2, max_leaf, true, false)` produces, bit for bit (a test compares
-//! them), in a fraction of its memory.
+//! Conversion of a binary BVH into an eight-wide one: the SAH collapse of Ylitie, Karras and
+//! Laine (2017, §3), which turns obvhs's binary tree into nodes of up to eight children with
+//! leaves of up to `max_leaf` primitives, each child's box its binary node's exact f32 box.
 //!
 //! The collapse is a dynamic programme: for each binary node `n` and `i = 1 … 7` it finds the
 //! cheapest way to turn the subtree under `n` into at most `i` children of a wide node (the node
 //! itself as a leaf or an internal wide node, or its slots distributed between its two
-//! children's subtrees). obvhs keeps every node's seven costs and decisions in one table of
-//! 8-byte entries, 56 bytes per binary node: 118 MB for the benchmarks' 1M-triangle terrain, the
-//! largest single allocation of its build. Here a node's costs live only on the recursion's
-//! stack until its parent has used them, and each decision is one byte (its kind and the two
-//! slot counts it hands to the children), 7 bytes per binary node.
+//! children's subtrees). A node's costs live only on the recursion's stack until its parent has
+//! used them, and each decision is one byte (its kind and the two slot counts it hands to the
+//! children), 7 bytes per binary node. (obvhs's own conversion keeps a table of 56 bytes per
+//! binary node: 118 MB for the benchmarks' 1M-triangle terrain.)
+//!
+//! The costs are those of our traversal: an internal child costs its box's half area (one node
+//! test, for eight boxes at once), a leaf its half area times [`LEAF_COST`] plus [`LANE_COST`] per
+//! primitive (one packet test for all its lanes, `packet`, and the exact tests of its
+//! candidates).
 
-use glam::{Vec3, Vec3A};
 use obvhs::bvh2::Bvh2;
-use obvhs::cwbvh::{CwBvh, node::CwBvhNode};
 
-/// Relative cost of testing one primitive against that of testing one wide node's children
-/// (obvhs's value).
-const PRIM_COST: f32 = 0.3;
+use super::wide::{self, WideBvh, WideNode};
 
-/// One over the largest quantised coordinate: child boxes are stored in 8 bits per plane.
-const DENOM: f32 = 1.0 / 255.0;
+/// A leaf's cost per unit of half area, against an internal node's 1: one packet test. Chosen
+/// by timing BDPT on `veach-bidir` (README: 0.3 and 1.0 were 1–3% slower).
+const LEAF_COST: f32 = 0.5;
+
+/// A leaf's further cost per primitive, for the exact tests of candidates (README: 0.1 and 0.2
+/// were within noise).
+const LANE_COST: f32 = 0.05;
+
+/// The cost of a leaf of `n` primitives per unit of its half area.
+fn leaf_cost(n: u32) -> f32 {
+    LEAF_COST + LANE_COST * n as f32
+}
 
 /// Slots of a wide node's children, and the decisions per binary node (`i = 1 … 7` roots).
 const SLOTS: usize = 7;
@@ -72,44 +80,38 @@ impl Decision {
 }
 
 /// The wide BVH of `bvh2`, whose leaves must each hold one primitive, with wide leaves of at
-/// most `max_leaf` (1 to 3) primitives and children ordered by octant (obvhs's
-/// `order_children`), without exact node boxes.
-pub fn to_cwbvh(bvh2: &Bvh2, max_leaf: u32) -> CwBvh {
+/// most `max_leaf` (1 to [`wide::MAX_LEAF`]) primitives, and the binary tree's primitive of each
+/// leaf position (a wide leaf's positions are `first .. first + count` of its pointer).
+pub fn to_wide(bvh2: &Bvh2, max_leaf: u32) -> (WideBvh, Vec<u32>) {
     assert!(
-        (1..=3).contains(&max_leaf),
-        "wide leaves hold 1 to 3 primitives"
+        (1..=wide::MAX_LEAF).contains(&max_leaf),
+        "wide leaves hold 1 to {} primitives",
+        wide::MAX_LEAF
     );
     if bvh2.nodes.is_empty() {
-        return CwBvh::default();
+        return (WideBvh::default(), Vec::new());
     }
     let mut decisions = vec![Decision::default(); bvh2.nodes.len() * SLOTS];
     cost(bvh2, 0, max_leaf, &mut decisions);
     let mut out = Collapse {
         bvh2,
         decisions: &decisions,
-        nodes: Vec::with_capacity(bvh2.primitive_indices.len() / 2 + 1),
+        nodes: Vec::with_capacity(bvh2.primitive_indices.len() / 8 + 1),
         primitive_indices: Vec::with_capacity(bvh2.primitive_indices.len()),
     };
-    out.nodes.push(CwBvhNode::default());
-    out.node(0, 0);
+    out.nodes.push(WideNode::EMPTY);
+    let depth = out.node(0, 0);
     let Collapse {
         mut nodes,
         primitive_indices,
         ..
     } = out;
     nodes.shrink_to_fit();
-    CwBvh {
-        nodes,
-        primitive_indices,
-        total_aabb: *bvh2.nodes[0].aabb(),
-        exact_node_aabbs: None,
-        uses_spatial_splits: bvh2.uses_spatial_splits,
-    }
+    (WideBvh { nodes, depth }, primitive_indices)
 }
 
 /// The costs of the subtree under binary node `n` for `i = 1 … 7` slots (recording the
-/// decisions that reach them), and its number of primitives. The arithmetic is obvhs's, in its
-/// order, so that ties fall the same way.
+/// decisions that reach them), and its number of primitives.
 fn cost(bvh2: &Bvh2, n: usize, max_leaf: u32, decisions: &mut [Decision]) -> ([f32; SLOTS], u32) {
     let node = &bvh2.nodes[n];
     let half_area = node.aabb().half_area();
@@ -117,7 +119,7 @@ fn cost(bvh2: &Bvh2, n: usize, max_leaf: u32, decisions: &mut [Decision]) -> ([f
     if node.prim_count != 0 {
         assert_eq!(node.prim_count, 1, "one primitive per binary leaf");
         d.fill(Decision::new(Kind::Leaf, 0, 0));
-        return ([half_area * PRIM_COST; SLOTS], 1);
+        return ([half_area * leaf_cost(1); SLOTS], 1);
     }
     let first = node.first_index as usize;
     let (left, nl) = cost(bvh2, first, max_leaf, decisions);
@@ -128,7 +130,7 @@ fn cost(bvh2: &Bvh2, n: usize, max_leaf: u32, decisions: &mut [Decision]) -> ([f
     // One slot: the node is a child of its own, a leaf or a wide node whose eight slots are
     // shared between the children's subtrees (seven ways: one and seven slots, two and six, …).
     let cost_leaf = if primitives <= max_leaf {
-        primitives as f32 * half_area * PRIM_COST
+        half_area * leaf_cost(primitives)
     } else {
         f32::INFINITY
     };
@@ -176,7 +178,7 @@ fn cost(bvh2: &Bvh2, n: usize, max_leaf: u32, decisions: &mut [Decision]) -> ([f
 struct Collapse<'a> {
     bvh2: &'a Bvh2,
     decisions: &'a [Decision],
-    nodes: Vec<CwBvhNode>,
+    nodes: Vec<WideNode>,
     primitive_indices: Vec<u32>,
 }
 
@@ -186,75 +188,39 @@ impl Collapse<'_> {
     }
 
     /// Fill wide node `w` from binary node `n` (an internal wide node), then its internal
-    /// children, depth first.
-    fn node(&mut self, w: usize, n: usize) {
-        let aabb = *self.bvh2.nodes[n].aabb();
-        let mut node = self.nodes[w];
-        node.p = Vec3::from(aabb.min);
-        // Per axis a power of two, so that 255 steps of it cover the box.
-        let e = ((aabb.max - aabb.min).max(Vec3A::splat(1e-20)) * DENOM)
-            .log2()
-            .ceil()
-            .exp2();
-        let rcp_e = 1.0 / e;
-        node.e = [e.x, e.y, e.z].map(|c| (c.to_bits() >> 23) as u8);
-
+    /// children, depth first; returns the levels of the subtree.
+    fn node(&mut self, w: usize, n: usize) -> usize {
         let mut children = [u32::MAX; 8];
         let mut count = 0;
         self.children(n, &mut children, &mut count, 0);
-        self.order(n, &mut children, count);
-
-        node.imask = 0;
-        node.primitive_base_idx = self.primitive_indices.len() as u32;
-        node.child_base_idx = self.nodes.len() as u32;
-        let (mut internal, mut primitives) = (0, 0u32);
-        for (slot, &c) in children.iter().enumerate() {
-            if c == u32::MAX {
-                continue;
-            }
+        let mut node = WideNode::EMPTY;
+        let mut internal = Vec::new();
+        let first_child = self.nodes.len();
+        for (slot, &c) in children[..count].iter().enumerate() {
             let b = self.bvh2.nodes[c as usize].aabb();
-            let lo = ((b.min - aabb.min) * rcp_e)
-                .floor()
-                .clamp(Vec3A::ZERO, Vec3A::splat(255.0));
-            let hi = ((b.max - aabb.min) * rcp_e)
-                .ceil()
-                .clamp(Vec3A::ZERO, Vec3A::splat(255.0));
-            node.child_min_x[slot] = lo.x as u8;
-            node.child_min_y[slot] = lo.y as u8;
-            node.child_min_z[slot] = lo.z as u8;
-            node.child_max_x[slot] = hi.x as u8;
-            node.child_max_y[slot] = hi.y as u8;
-            node.child_max_z[slot] = hi.z as u8;
+            let (lo, hi) = (b.min.to_array(), b.max.to_array());
             match self.decision(c as usize, 0).kind() {
                 Kind::Leaf => {
+                    let first = self.primitive_indices.len() as u32;
                     let count = self.leaf_primitives(c as usize);
-                    // The primitive count in unary in the top three bits.
-                    node.child_meta[slot] = primitives as u8
-                        | match count {
-                            1 => 0b0010_0000,
-                            2 => 0b0110_0000,
-                            _ => 0b1110_0000,
-                        };
-                    primitives += count;
+                    node.set(slot, lo, hi, wide::leaf(first, count));
                 }
                 Kind::Internal => {
-                    node.imask |= 1 << slot;
-                    node.child_meta[slot] = (24 + slot as u8) | 0b0010_0000;
-                    internal += 1;
+                    let index = (first_child + internal.len()) as u32;
+                    node.set(slot, lo, hi, index);
+                    internal.push(c as usize);
                 }
                 Kind::Distribute => unreachable!("a child slot is a leaf or a wide node"),
             }
         }
         self.nodes
-            .resize(self.nodes.len() + internal, CwBvhNode::default());
+            .resize(self.nodes.len() + internal.len(), WideNode::EMPTY);
         self.nodes[w] = node;
-        let mut next = node.child_base_idx as usize;
-        for (slot, &c) in children.iter().enumerate() {
-            if c != u32::MAX && node.imask & (1 << slot) != 0 {
-                self.node(next, c as usize);
-                next += 1;
-            }
+        let mut depth = 1;
+        for (k, c) in internal.into_iter().enumerate() {
+            depth = depth.max(1 + self.node(first_child + k, c));
         }
+        depth
     }
 
     /// Append the primitives under binary node `n` (a wide leaf) and count them.
@@ -288,55 +254,16 @@ impl Collapse<'_> {
             }
         }
     }
-
-    /// Place the children in the slots whose octant direction best matches their offset from
-    /// the node's centre (greedily, cheapest pair first), so that traversal can visit them near
-    /// to far by the ray's octant (Ylitie et al. 2017, §3.2).
-    fn order(&self, n: usize, children: &mut [u32; 8], count: usize) {
-        let p = self.bvh2.nodes[n].aabb().center();
-        let mut cost = [[f32::MAX; 8]; 8];
-        for s in 0..8 {
-            let sign = |bit: usize| if s & bit != 0 { -1.0 } else { 1.0 };
-            let d = Vec3A::new(sign(4), sign(2), sign(1));
-            for c in 0..count {
-                cost[c][s] = d.dot(self.bvh2.nodes[children[c] as usize].aabb().center() - p);
-            }
-        }
-        let mut assignment = [usize::MAX; 8];
-        let mut filled = [false; 8];
-        loop {
-            let (mut min, mut slot, mut child) = (f32::MAX, usize::MAX, usize::MAX);
-            for c in 0..count {
-                if assignment[c] == usize::MAX {
-                    for s in 0..8 {
-                        if !filled[s] && cost[c][s] < min {
-                            (min, slot, child) = (cost[c][s], s, c);
-                        }
-                    }
-                }
-            }
-            if slot == usize::MAX {
-                break;
-            }
-            filled[slot] = true;
-            assignment[child] = slot;
-        }
-        let original = std::mem::replace(children, [u32::MAX; 8]);
-        for c in 0..count {
-            children[assignment[c]] = original[c];
-        }
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::accel::{References, build};
+    use glam::Vec3A;
     use mcmc_core::rng::{stream, uniform};
     use obvhs::aabb::Aabb;
-    use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
-    use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
-    use obvhs::ploc::PlocBuilder;
+    use std::collections::HashSet;
 
     /// Sets of random boxes: small and large ones, clustered and spread, with duplicates and
     /// flat boxes.
@@ -372,36 +299,75 @@ mod tests {
         out
     }
 
-    /// Our build is obvhs's `build_cwbvh` with the medium preset, bit for bit: every node and
-    /// the primitive order, for leaves of one to three primitives. (Changing `PRIM_COST`, or the
-    /// PLOC search distance, fails it: checked by hand.)
+    /// Every box of a subtree lies inside its child box, bit for bit (the boxes are unions of
+    /// the references' f32 boxes); every reference sits in exactly one leaf of at most
+    /// `max_leaf`; empty slots are inverted; `depth` is the deepest path.
     #[test]
-    fn build_equals_obvhs() {
-        let params = obvhs::BvhBuildParams::medium_build();
+    fn wide_trees_are_valid() {
         for aabbs in box_sets() {
             let n = aabbs.len();
-            let mut theirs = PlocBuilder::with_capacity(n).build(
-                params.ploc_search_distance,
-                &aabbs,
-                (0..n as u32).collect(),
-                params.sort_precision,
-                params.search_depth_threshold,
-            );
-            ReinsertionOptimizer::default().run(&mut theirs, params.reinsertion_batch_ratio, None);
-            for max_leaf in 1..=3 {
+            for max_leaf in [1, 3, 8] {
                 let mut references = References::with_capacity(n);
                 for &aabb in &aabbs {
                     references.push(aabb);
                 }
-                let ours = build(references, max_leaf);
-                let theirs = bvh2_to_cwbvh(&theirs, max_leaf, true, false);
-                assert_eq!(ours.nodes.len(), theirs.nodes.len(), "{n} boxes");
+                let (tree, positions) = build(references, max_leaf);
+                let mut seen = HashSet::new();
+                assert_eq!(positions.len(), n);
                 assert!(
-                    ours.nodes == theirs.nodes,
-                    "nodes differ, max_leaf {max_leaf}"
+                    positions.iter().all(|&p| seen.insert(p)),
+                    "each reference once"
                 );
-                assert_eq!(ours.primitive_indices, theirs.primitive_indices);
-                assert_eq!(ours.total_aabb, theirs.total_aabb);
+                // Returns the subtree's box and depth.
+                fn check(
+                    tree: &WideBvh,
+                    positions: &[u32],
+                    aabbs: &[Aabb],
+                    max_leaf: u32,
+                    w: usize,
+                    leaves: &mut usize,
+                ) -> usize {
+                    let node = &tree.nodes[w];
+                    let mut depth = 1;
+                    for slot in 0..wide::WIDTH {
+                        let lo = [0, 2, 4].map(|p| node.planes[p][slot]);
+                        let hi = [1, 3, 5].map(|p| node.planes[p][slot]);
+                        if lo[0] == f32::INFINITY {
+                            assert!(hi.iter().all(|&h| h == f32::NEG_INFINITY), "empty slot");
+                            continue;
+                        }
+                        let inside =
+                            |b: &Aabb| (0..3).all(|a| lo[a] <= b.min[a] && b.max[a] <= hi[a]);
+                        let child = node.child[slot];
+                        if child & wide::LEAF != 0 {
+                            let (first, count) = wide::leaf_range(child);
+                            assert!((1..=max_leaf).contains(&count));
+                            for p in first..first + count {
+                                assert!(inside(&aabbs[positions[p as usize] as usize]));
+                            }
+                            *leaves += count as usize;
+                        } else {
+                            let sub = &tree.nodes[child as usize];
+                            for s in 0..wide::WIDTH {
+                                if sub.planes[0][s] != f32::INFINITY {
+                                    let b = Aabb::new(
+                                        [0, 2, 4].map(|p| sub.planes[p][s]).into(),
+                                        [1, 3, 5].map(|p| sub.planes[p][s]).into(),
+                                    );
+                                    assert!(inside(&b), "child box inside its parent's slot");
+                                }
+                            }
+                            depth = depth.max(
+                                1 + check(tree, positions, aabbs, max_leaf, child as usize, leaves),
+                            );
+                        }
+                    }
+                    depth
+                }
+                let mut leaves = 0;
+                let depth = check(&tree, &positions, &aabbs, max_leaf, 0, &mut leaves);
+                assert_eq!(leaves, n, "{n} boxes, max_leaf {max_leaf}");
+                assert_eq!(depth, tree.depth);
             }
         }
     }

@@ -1,8 +1,10 @@
-//! The bounding volume hierarchy: obvhs' compressed wide BVH (CWBVH, built with PLOC) over
-//! triangles and spheres. Traversal runs in f32 on boxes padded by a relative epsilon, from a
-//! point a little behind the ray's origin, so that neither rounding nor obvhs's smallest entry
-//! distance can lose a hit; primitives are intersected in f64 and the closest f64 hit is kept.
-//! Triangles whose bounding box is mostly empty enter the BVH as several references (`split`).
+//! The bounding volume hierarchy over triangles and spheres: obvhs's binary BVH (PLOC with
+//! reinsertion) collapsed into an eight-wide tree by the SAH (`convert`), with exact f32 child
+//! boxes padded by a relative epsilon (`wide`), and each leaf's primitives as one packet of f32
+//! triangles (`packet`). Traversal and the packet test run in f32 and are conservative: a
+//! primitive that the f64 test could hit is always reached and always a candidate, so the
+//! candidates' f64 tests give the closest f64 hit exactly. Triangles whose bounding box is mostly
+//! empty enter the BVH as several references (`split`).
 //! Occlusion queries first test the thread's recent occluders (`occluders`). A ray leaving a
 //! surface, or a segment between two surfaces, skips the triangles it leaves
 //! ([`Bvh::closest_hit_leaving`], [`Bvh::occluded_between`]).
@@ -16,15 +18,15 @@ mod convert;
 #[cfg(target_arch = "x86_64")]
 mod cpu;
 mod occluders;
+mod packet;
 mod split;
+mod wide;
 
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::{Bvh2, node::Bvh2Node};
-use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::PlocBuilder;
-use obvhs::ray::Ray as BvhRay;
 
 /// A primitive of the scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -137,14 +139,13 @@ impl References {
     }
 }
 
-/// A CWBVH over `references`: obvhs's `build_cwbvh` with the medium preset (PLOC, reinsertion,
-/// conversion), with leaves of at most `max_leaf` references, through our lean copy of obvhs's
-/// conversion ([`convert`]).
-fn build(references: References, max_leaf: u32) -> CwBvh {
+/// The wide BVH over `references` (PLOC, reinsertion, the SAH collapse), with leaves of at
+/// most `max_leaf` references, and the reference of each leaf position.
+fn build(references: References, max_leaf: u32) -> (wide::WideBvh, Vec<u32>) {
     if references.len() == 0 {
-        return CwBvh::default();
+        return (wide::WideBvh::default(), Vec::new());
     }
-    convert::to_cwbvh(&binary(references), max_leaf)
+    convert::to_wide(&binary(references), max_leaf)
 }
 
 /// obvhs's binary BVH over `references` (not empty), one per leaf: PLOC and reinsertion with
@@ -217,7 +218,8 @@ fn count_ray() {
 
 /// The acceleration structure with its primitives.
 pub struct Bvh {
-    bvh: CwBvh,
+    wide: wide::WideBvh,
+    packets: packet::Packets,
     /// Primitives in the order of their first reference in the BVH's leaves, so traversal reads
     /// them mostly sequentially; a primitive's index everywhere in the renderer is its position
     /// here.
@@ -230,26 +232,8 @@ pub struct Bvh {
     /// This BVH's key in the per-thread cache of triangle frames ([`Bvh::frame`]): unique per
     /// BVH built in the process.
     id: u32,
-    /// Which primitives each leaf reference stands for.
-    leaves: Leaves,
-}
-
-/// Which primitives the BVH's leaf references stand for. A reference is one primitive, or two
-/// consecutive ones that share it ([`PAIR`]); a split triangle ([`split`]) has several.
-#[derive(Debug)]
-enum Leaves {
-    /// Reference `p` is primitive `p`: nothing paired or split, `primitives` in leaf order.
-    Direct,
-    /// Reference `p` is primitives `first[p]..first[p + 1]`: some pairs, nothing split, so
-    /// `primitives` is still in leaf order.
-    Ranges(Vec<u32>),
-    /// Reference `p` is `copies[first[p]..first[p + 1]]`, whose indices are `index[..]`: some
-    /// triangle is split, and its copies keep traversal reading primitives sequentially.
-    Copies {
-        first: Vec<u32>,
-        copies: Vec<Primitive>,
-        index: Vec<u32>,
-    },
+    /// How many references the leaves hold.
+    references: usize,
 }
 
 /// Two consecutive primitives with one box each share a BVH reference when the box around both
@@ -272,11 +256,6 @@ pub enum Compact {
     Pairs,
 }
 
-/// How far behind a segment's origin its traversal ray starts: twice obvhs's smallest entry
-/// distance (`EPSILON`, 10⁻⁴, private to obvhs), so that boxes at the origin lie beyond it
-/// whatever the f32 rounding of the shifted origin (the boxes' padding covers that).
-const TRAVERSAL_BACKOFF: f64 = 2e-4;
-
 /// Flag of a reference (in `Topology`) that stands for two primitives.
 const PAIRED: u32 = 1 << 31;
 
@@ -291,7 +270,7 @@ fn to_f32(v: DVec3) -> Vec3A {
 /// primitives afterwards, directly in leaf order, so a large mesh never exists twice in memory
 /// (nor alongside the builder's temporary structures).
 pub struct Topology {
-    bvh: CwBvh,
+    wide: wide::WideBvh,
     /// `original[i]`: the caller's index of the primitive that goes to position `i`.
     original: Vec<u32>,
     /// Each leaf reference's (first) position in the final primitive list, with [`PAIRED`] set
@@ -391,17 +370,20 @@ impl Bvh {
             refs.push(padded(b.0, b.1));
             owner.push(j);
         }
-        // A leaf holds up to three references, or one pair: leaves of two or three pairs made
-        // rays 3–10% slower (on `door` and the terrain).
+        // A leaf's packet holds up to eight primitives: eight references, or four pairs.
         let paired = owner.iter().any(|&o| o & PAIRED != 0);
-        let bvh = build(refs, if paired { 1 } else { 3 });
+        let max_leaf = if paired {
+            packet::LANES / 2
+        } else {
+            packet::LANES
+        } as u32;
+        let (wide, leaf_references) = build(refs, max_leaf);
         // Primitives are numbered by their first reference in leaf order, so traversal mostly
         // reads them sequentially (the two of a pair are never split, so they get consecutive
         // numbers).
         let mut canonical = vec![u32::MAX; count];
         let mut original = Vec::with_capacity(count);
-        let leaf: Vec<u32> = bvh
-            .primitive_indices
+        let leaf: Vec<u32> = leaf_references
             .iter()
             .map(|&r| {
                 let o = owner[r as usize];
@@ -416,7 +398,7 @@ impl Bvh {
             })
             .collect();
         Topology {
-            bvh,
+            wide,
             original,
             leaf,
         }
@@ -430,7 +412,7 @@ impl Bvh {
         shading: Vec<TriangleShading>,
     ) -> Self {
         let Topology {
-            bvh,
+            mut wide,
             original,
             leaf,
         } = topology;
@@ -439,114 +421,71 @@ impl Bvh {
             original.len(),
             "one primitive per position of the topology"
         );
-        let pairs = leaf.iter().filter(|&&l| l & PAIRED != 0).count();
-        let span = |l: u32| 1 + (l >> 31) as usize;
-        let first = || -> Vec<u32> {
-            let mut first = Vec::with_capacity(leaf.len() + 1);
-            let mut n = 0u32;
-            first.push(0);
-            for &l in &leaf {
-                n += span(l) as u32;
-                first.push(n);
-            }
-            first
-        };
-        let leaves = if leaf.len() + pairs == primitives.len() {
-            // Every primitive has exactly one reference, so positions are in leaf order.
-            assert!(
-                leaf.iter()
-                    .scan(0u32, |n, &l| {
-                        let at = *n;
-                        *n += span(l) as u32;
-                        Some(at == l & !PAIRED)
-                    })
-                    .all(|ok| ok),
-                "one reference per primitive: positions follow leaf order"
-            );
-            if pairs == 0 {
-                Leaves::Direct
-            } else {
-                Leaves::Ranges(first())
-            }
-        } else {
-            let index: Vec<u32> = leaf
-                .iter()
-                .flat_map(|&l| {
-                    let i = l & !PAIRED;
-                    i..i + span(l) as u32
-                })
-                .collect();
-            let copies = index.iter().map(|&i| primitives[i as usize]).collect();
-            Leaves::Copies {
-                first: first(),
-                copies,
-                index,
-            }
-        };
+        let packets = Self::packets(&mut wide, &leaf, &primitives);
         static NEXT_ID: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
         Self {
-            bvh,
+            wide,
+            packets,
             primitives,
             original,
             shading,
             id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
-            leaves,
+            references: leaf.len(),
         }
+    }
+
+    /// The leaves' packets: each leaf's primitives (those of its references, `leaf[position]`,
+    /// each primitive once: a split triangle's pieces may share a leaf) as one packet, and the
+    /// leaf's pointer rewritten to the packet's first lane and lane count. Packets are stored in
+    /// the order of the leaves' positions, so that where no triangle is split lane `k` holds
+    /// primitive `k` (primitives are numbered in leaf order) and the packets need no index.
+    fn packets(
+        wide: &mut wide::WideBvh,
+        leaf: &[u32],
+        primitives: &[Primitive],
+    ) -> packet::Packets {
+        // Each leaf's primitives, once each.
+        let lanes_of = |child: u32, out: &mut Vec<u32>| {
+            out.clear();
+            let (first, count) = wide::leaf_range(child);
+            for &l in &leaf[first as usize..(first + count) as usize] {
+                let at = l & !PAIRED;
+                for index in at..at + 1 + (l >> 31) {
+                    if !out.contains(&index) {
+                        out.push(index);
+                    }
+                }
+            }
+        };
+        let mut indices = Vec::with_capacity(packet::LANES);
+        // Lanes in all, to allocate the packets once.
+        let mut total = 0;
+        wide.visit_leaves(|child| {
+            lanes_of(*child, &mut indices);
+            total += indices.len();
+        });
+        let mut packets = packet::Packets::with_capacity(total);
+        let mut lanes: Vec<(u32, packet::Lane)> = Vec::with_capacity(packet::LANES);
+        wide.visit_leaves(|child| {
+            lanes_of(*child, &mut indices);
+            lanes.clear();
+            lanes.extend(indices.iter().map(|&index| {
+                let lane = match &primitives[index as usize] {
+                    Primitive::Triangle(t) => packet::Lane::Triangle(t.p),
+                    Primitive::Sphere(s) => packet::Lane::Sphere(s.center, s.radius),
+                };
+                (index, lane)
+            }));
+            let (at, special) = packets.push(&lanes);
+            *child = wide::leaf(at, lanes.len() as u32) | if special { wide::LEAF_FLAG } else { 0 };
+        });
+        packets
     }
 
     /// How many references the BVH's leaves hold: one per primitive, more where triangles are
     /// split, fewer where primitives are paired ([`Compact::Pairs`]).
     pub fn references(&self) -> usize {
-        match &self.leaves {
-            Leaves::Direct => self.primitives.len(),
-            Leaves::Ranges(first) | Leaves::Copies { first, .. } => first.len() - 1,
-        }
-    }
-
-    /// Calls `test` on each primitive (and its index) of the reference at leaf position `id`
-    /// until it returns true; returns whether it did.
-    #[inline(always)]
-    fn any_of_reference(&self, id: usize, mut test: impl FnMut(&Primitive, u32) -> bool) -> bool {
-        match &self.leaves {
-            Leaves::Direct => test(&self.primitives[id], id as u32),
-            Leaves::Ranges(first) => {
-                (first[id]..first[id + 1]).any(|k| test(&self.primitives[k as usize], k))
-            }
-            Leaves::Copies {
-                first,
-                copies,
-                index,
-            } => (first[id] as usize..first[id + 1] as usize).any(|k| test(&copies[k], index[k])),
-        }
-    }
-
-    /// The f32 ray that traverses the BVH for the segment `o + t d`, `t ∈ (0, t_max)`: started
-    /// [`TRAVERSAL_BACKOFF`] behind `o`, since obvhs's node test enters no box closer than
-    /// `10⁻⁴` along the ray (its `EPSILON`), which lost primitives within that distance of the
-    /// origin: a shadow ray leaving a floor `5·10⁻⁵` from a wall, toward the wall, went through
-    /// it (`door`'s back corner). The primitive tests take the f64 segment itself.
-    fn bvh_ray(o: DVec3, d: DVec3, t_max: f64) -> BvhRay {
-        let tmax = if t_max.is_finite() {
-            Self::traversal_distance(t_max)
-        } else {
-            f32::INFINITY
-        };
-        // `+ 0.0` turns negative zeros into positive ones: obvhs's traversal misses flat nodes
-        // for directions with a −0.0 component (e.g. `−n` of an axis-aligned normal), which it
-        // hits with +0.0.
-        BvhRay::new(
-            to_f32(o - d * TRAVERSAL_BACKOFF),
-            to_f32(d + DVec3::ZERO),
-            0.0,
-            tmax,
-        )
-    }
-
-    /// The distance along [`Bvh::bvh_ray`] of the point at `t` on the segment, slightly larger, so
-    /// that traversal never culls a box whose f32 entry distance rounds above it.
-    #[inline]
-    fn traversal_distance(t: f64) -> f32 {
-        ((t + TRAVERSAL_BACKOFF) * (1.0 + 1e-6)) as f32
+        self.references
     }
 
     /// The closest hit of the ray `o + t d`, `t ∈ (0, t_max)`.
@@ -574,34 +513,18 @@ impl Bvh {
         self.closest_hit_in::<false>(o, d, t_max, leaves)
     }
 
-    /// [`Bvh::closest_hit_leaving`] compiled for x86-64-v3, with the AVX2 node test (see
-    /// [`cpu`]).
+    /// [`Bvh::closest_hit_leaving`] compiled for x86-64-v3, with the AVX2 node and packet tests
+    /// (see [`cpu`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,bmi1,bmi2,fma,lzcnt,popcnt")]
     fn closest_hit_v3(&self, o: DVec3, d: DVec3, t_max: f64, leaves: u32) -> Option<Hit> {
         self.closest_hit_in::<true>(o, d, t_max, leaves)
     }
 
-    /// The ray against a node's children: obvhs's SSE test, or with `V3` the AVX2 one
-    /// ([`cpu::intersect_node_v3`]), which gives the same mask.
-    #[inline(always)]
-    fn node_hits<const V3: bool>(
-        node: &obvhs::cwbvh::node::CwBvhNode,
-        ray: &BvhRay,
-        oct_inv4: u32,
-    ) -> u32 {
-        #[cfg(target_arch = "x86_64")]
-        if V3 {
-            // SAFETY: `V3` is only set by the `_v3` queries, which run only when the CPU has
-            // their features (`cpu::has_v3`).
-            return unsafe { cpu::intersect_node_v3(node, ray, oct_inv4) };
-        }
-        node.intersect_ray(ray, oct_inv4)
-    }
-
-    /// The query itself, inlined into each copy; the traversal is expanded here (not called), so
-    /// it is compiled with the features of the copy it lands in. (The primitive tests stay out of
-    /// line, shared by both copies and compiled for baseline x86-64.)
+    /// The query itself, inlined into each copy, traversal and packet tests included, so that
+    /// it is compiled with the features of the copy it lands in. (The f64 primitive tests stay
+    /// out of line, shared by both copies.) Leaves are visited near to far, and a leaf's
+    /// candidates in lane order; a hit is kept only if nearer than the best so far.
     #[inline(always)]
     fn closest_hit_in<const V3: bool>(
         &self,
@@ -612,31 +535,27 @@ impl Bvh {
     ) -> Option<Hit> {
         let mut best: Option<((f64, f64, f64), u32)> = None;
         let mut best_t = t_max;
-        use glam::UVec2; // named by `traverse!`
-        let mut ray = Self::bvh_ray(o, d, t_max);
-        let mut state = self.bvh.new_traversal(ray.direction);
-        let mut node;
-        // obvhs's traversal written out with its own `traverse!` (the body of its `ray_traverse`),
-        // so that it is compiled into whichever copy of the query calls it.
-        obvhs::traverse!(
-            self.bvh,
-            node,
-            state,
-            Self::node_hits::<V3>(node, &ray, state.oct_inv4),
-            {
-                self.any_of_reference(state.primitive_id as usize, |primitive, index| {
-                    if index == leaves && primitive.is_triangle() {
-                        return false;
-                    }
-                    if let Some(h) = primitive.intersect_t(o, d, best_t) {
-                        best_t = h.0;
-                        best = Some((h, index));
-                        ray.tmax = ray.tmax.min(Self::traversal_distance(h.0));
-                    }
-                    false
-                });
+        let mut ray = wide::WideRay::new(o.to_array(), d.to_array(), wide::traversal_t_max(t_max));
+        let packet_ray = packet::PacketRay::new(o, d);
+        let (mut fixed, mut heap) = (wide::FIXED, Vec::new());
+        let mut traversal = wide::Traversal::<V3, true>::new(&self.wide, &mut fixed, &mut heap);
+        while let Some(leaf) = traversal.next_leaf(&ray) {
+            let mut mask = self.packets.candidates::<V3>(leaf, &packet_ray, ray.t_max);
+            while mask != 0 {
+                let j = mask.trailing_zeros();
+                mask &= mask - 1;
+                let index = self.packets.index(leaf, j);
+                let primitive = &self.primitives[index as usize];
+                if index == leaves && primitive.is_triangle() {
+                    continue;
+                }
+                if let Some(h) = primitive.intersect_t(o, d, best_t) {
+                    best_t = h.0;
+                    best = Some((h, index));
+                    ray.t_max = wide::traversal_t_max(h.0);
+                }
             }
-        );
+        }
         best.map(|(h, index)| self.hit_point(o, d, h, index))
     }
 
@@ -693,7 +612,7 @@ impl Bvh {
     /// traversal (a shadow cache, Haines & Greenberg 1986; module `occluders`): successive shadow
     /// rays from one vertex or towards one light are often blocked by the same triangles. The
     /// answer is exact either way: a primitive that blocks the segment is the proof that it is
-    /// blocked, and traversal finds a blocker whenever one exists (`TRAVERSAL_BACKOFF`), so
+    /// blocked, and traversal finds a blocker whenever one exists (its tests are conservative), so
     /// images do not depend on the cache, nor on the thread count. (Any index of this BVH will
     /// do, so the cache needs no reset between scenes.)
     pub fn occluded(&self, o: DVec3, d: DVec3, t_max: f64) -> bool {
@@ -730,7 +649,8 @@ impl Bvh {
         self.occluded_in::<false>(o, d, t_max, ends)
     }
 
-    /// [`Bvh::occluded_between`] compiled for x86-64-v3, with the AVX2 node test (see [`cpu`]).
+    /// [`Bvh::occluded_between`] compiled for x86-64-v3, with the AVX2 node and packet tests
+    /// (see [`cpu`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,bmi1,bmi2,fma,lzcnt,popcnt")]
     fn occluded_v3(&self, o: DVec3, d: DVec3, t_max: f64, ends: [u32; 2]) -> Option<u32> {
@@ -738,7 +658,7 @@ impl Bvh {
     }
 
     /// The query itself, inlined into each copy (as [`Bvh::closest_hit_in`]): the index of a
-    /// primitive that blocks the segment, if one does.
+    /// primitive that blocks the segment, if one does. Leaves are visited in any order.
     #[inline(always)]
     fn occluded_in<const V3: bool>(
         &self,
@@ -747,35 +667,26 @@ impl Bvh {
         t_max: f64,
         ends: [u32; 2],
     ) -> Option<u32> {
-        use glam::UVec2; // named by `traverse!`
-        let ray = Self::bvh_ray(o, d, t_max);
-        let mut state = self.bvh.new_traversal(ray.direction);
-        let mut node;
-        let mut blocked = None;
-        // As in `closest_hit_in`: obvhs's `ray_traverse_miss`, written out.
-        'traversal: {
-            obvhs::traverse!(
-                self.bvh,
-                node,
-                state,
-                Self::node_hits::<V3>(node, &ray, state.oct_inv4),
-                {
-                    if self.any_of_reference(state.primitive_id as usize, |p, index| {
-                        if (index == ends[0] || index == ends[1]) && p.is_triangle() {
-                            return false;
-                        }
-                        let hit = p.hits(o, d, t_max);
-                        if hit {
-                            blocked = Some(index);
-                        }
-                        hit
-                    }) {
-                        break 'traversal;
-                    }
+        let ray = wide::WideRay::new(o.to_array(), d.to_array(), wide::traversal_t_max(t_max));
+        let packet_ray = packet::PacketRay::new(o, d);
+        let (mut fixed, mut heap) = (wide::FIXED, Vec::new());
+        let mut traversal = wide::Traversal::<V3, false>::new(&self.wide, &mut fixed, &mut heap);
+        while let Some(leaf) = traversal.next_leaf(&ray) {
+            let mut mask = self.packets.candidates::<V3>(leaf, &packet_ray, ray.t_max);
+            while mask != 0 {
+                let j = mask.trailing_zeros();
+                mask &= mask - 1;
+                let index = self.packets.index(leaf, j);
+                let p = &self.primitives[index as usize];
+                if (index == ends[0] || index == ends[1]) && p.is_triangle() {
+                    continue;
                 }
-            );
+                if p.hits(o, d, t_max) {
+                    return Some(index);
+                }
+            }
         }
-        blocked
+        None
     }
 
     /// Bounds of everything.
@@ -855,8 +766,10 @@ mod tests {
         // And a grid, whose quads pair under `Compact::Pairs`.
         let mut input = input;
         input.extend(grid(8, 4.0, &mut r));
+        let mut references = Vec::new();
         for compact in [Compact::No, Compact::Pairs] {
             let one = Bvh::with_options(input.clone(), Vec::new(), compact);
+            references.push(one.references());
             let topology = Bvh::topology(input.len(), compact, |i, out| input[i].references(out));
             let ordered = topology
                 .original()
@@ -864,11 +777,6 @@ mod tests {
                 .map(|&i| input[i as usize])
                 .collect();
             let two = Bvh::assemble(topology, ordered, Vec::new());
-            let Leaves::Copies { first, .. } = &one.leaves else {
-                panic!("the test should exercise splits")
-            };
-            let pairs = (1..first.len()).filter(|&p| first[p] - first[p - 1] == 2);
-            assert_eq!(pairs.count() > 0, compact == Compact::Pairs, "{compact:?}");
             assert_eq!(one.original, two.original);
             assert_eq!(one.primitives, two.primitives);
             for _ in 0..2000 {
@@ -881,6 +789,9 @@ mod tests {
                 assert_eq!(one.occluded(o, d, 2.0), two.occluded(o, d, 2.0));
             }
         }
+        // Splits (more references than primitives) and pairs (fewer with them) both occur.
+        assert!(references[0] > input.len(), "{references:?}");
+        assert!(references[1] < references[0], "{references:?}");
     }
 
     /// A flat quad is hit by rays along its normal whatever the sign of their zero components
@@ -957,19 +868,17 @@ mod tests {
             }));
         }
         let bvh = Bvh::new(prims.clone());
-        let references = match &bvh.leaves {
-            Leaves::Copies { first, .. } => first.len() - 1,
-            _ => 0,
-        };
+        let references = bvh.references();
         assert!(references > prims.len() + 100, "{references} references");
         agrees_on_random_rays(&prims, &bvh, 4000, &mut r, 12.0);
     }
 
-    /// Primitives closer to a segment's origin than obvhs's smallest box entry distance (10⁻⁴)
-    /// are found, by closest hit and occlusion, on the portable and the v3 path: a room's floor
+    /// Primitives very close to a segment's origin (closer than obvhs's smallest box entry
+    /// distance, 10⁻⁴, which its traversal, used before the wide BVH, never entered) are found, by closest hit and occlusion, on the portable and the v3 path: a room's floor
     /// and back wall (two triangles each, among other geometry so the BVH has depth), and
-    /// segments leaving the floor at distances `δ` from the wall, toward it. Without
-    /// [`TRAVERSAL_BACKOFF`] every segment with `δ` below about 10⁻⁴ went through the wall.
+    /// segments leaving the floor at distances `δ` from the wall, toward it. (With obvhs's
+    /// traversal from the origin itself, every segment with `δ` below about 10⁻⁴ went through the
+    /// wall.)
     #[test]
     fn primitives_at_the_origin_are_found() {
         let quad = |a: DVec3, b: DVec3, c: DVec3, d: DVec3| {
@@ -1289,26 +1198,24 @@ mod tests {
         let mut rng = stream(4, 0);
         let mut r = || uniform(&mut rng);
         let prims = grid(24, 10.0, &mut r);
-        assert!(matches!(Bvh::new(prims.clone()).leaves, Leaves::Direct));
+        assert_eq!(Bvh::new(prims.clone()).references(), prims.len());
         let bvh = Bvh::with_options(prims.clone(), Vec::new(), Compact::Pairs);
-        let Leaves::Ranges(first) = &bvh.leaves else {
-            panic!("a grid is paired, not split: {:?}", bvh.leaves)
-        };
         // Every quad is a pair (edge quads included): one reference per two triangles.
-        assert_eq!(first.len() - 1, prims.len() / 2);
+        assert_eq!(bvh.references(), prims.len() / 2);
         agrees_on_random_rays(&prims, &bvh, 3000, &mut r, 12.0);
 
         let mut mixed = prims;
         mixed.extend(slivers_and_spheres(40, &mut r));
         let bvh = Bvh::with_options(mixed.clone(), Vec::new(), Compact::Pairs);
-        let Leaves::Copies { first, index, .. } = &bvh.leaves else {
-            panic!("slivers are split: {:?}", bvh.leaves)
-        };
-        let pairs = (1..first.len())
-            .filter(|&p| first[p] - first[p - 1] == 2)
-            .count();
-        assert!(pairs >= 24 * 24, "{pairs} pairs");
-        assert!(index.len() > mixed.len(), "{} slots", index.len());
+        // The grid's quads pair (576 references for 1152 triangles) and the 40 slivers split
+        // (more references than slivers).
+        let grid_alone = 24 * 24;
+        let others = mixed.len() - 2 * grid_alone;
+        assert!(
+            bvh.references() > grid_alone + others && bvh.references() < mixed.len(),
+            "{} references",
+            bvh.references()
+        );
         agrees_on_random_rays(&mixed, &bvh, 3000, &mut r, 12.0);
     }
 
@@ -1366,54 +1273,5 @@ mod tests {
             }
             assert!(hits > 300, "{hits} hits");
         }
-    }
-
-    /// The AVX2 node test (`cpu::intersect_node_v3`) returns obvhs's hit mask bit for bit, for
-    /// every node of a BVH and rays of every octant, axis-parallel ones (zero components of either
-    /// sign, which obvhs's safe inverse turns into large finite ones), origins inside the boxes,
-    /// and `tmax` from below obvhs's minimum entry distance (so a changed `OBVHS_EPSILON` fails) to
-    /// infinite. (Skipped on CPUs without v3.)
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn node_test_matches_obvhs() {
-        if !v3_or_skip() {
-            return;
-        }
-        let mut rng = stream(8, 0);
-        let mut r = || uniform(&mut rng);
-        let prims = grid_slivers_and_spheres(12, &mut r);
-        let bvh = Bvh::new(prims);
-        let nodes = &bvh.bvh.nodes;
-        assert!(nodes.len() > 20, "{} nodes", nodes.len());
-        let (mut rays, mut hit_bits) = (0, 0u64);
-        for k in 0..4000 {
-            let o = DVec3::new(r(), r(), r()) * 12.0 - DVec3::splat(1.0);
-            let mut d = DVec3::new(r(), r(), r()) - DVec3::splat(0.5);
-            // Zero components (either sign), one or two at a time.
-            for (axis, sign) in [(k % 3, k % 5), ((k + 1) % 3, k % 7)]
-                .into_iter()
-                .take(k % 3)
-            {
-                d[axis] = if sign % 2 == 0 { 0.0 } else { -0.0 };
-            }
-            if d == DVec3::ZERO {
-                continue;
-            }
-            let t = [5e-5, 0.5, 5.0, 30.0, f64::INFINITY][k % 5];
-            let ray = BvhRay::new(to_f32(o), to_f32(d.normalize()), 0.0, t as f32);
-            let oct_inv4 = bvh.bvh.new_traversal(ray.direction).oct_inv4;
-            for node in nodes {
-                let expected = node.intersect_ray(&ray, oct_inv4);
-                // SAFETY: `cpu_has_v3` said the CPU has the features.
-                let got = unsafe { cpu::intersect_node_v3(node, &ray, oct_inv4) };
-                assert_eq!(got, expected, "ray {ray:?}, node {node:?}");
-                hit_bits += expected.count_ones() as u64;
-            }
-            rays += 1;
-        }
-        assert!(
-            rays > 3000 && hit_bits > 5000,
-            "{rays} rays, {hit_bits} bits"
-        );
     }
 }
