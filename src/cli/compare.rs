@@ -170,8 +170,9 @@ pub fn run(a: CompareArgs) -> Result<(), CliError> {
             "--algos needs at least one algorithm".into(),
         ));
     }
-    let loaded = scene_arg::load(&a.scene)?;
-    let (scene, _) = scene_arg::build(&loaded, a.options.resolution, a.options.compact())?;
+    let mut loaded = scene_arg::load(&a.scene)?;
+    let (scene, _) =
+        scene_arg::build_taking(&mut loaded, a.options.resolution, a.options.compact())?;
     let dir = a
         .output
         .clone()

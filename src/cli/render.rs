@@ -91,8 +91,9 @@ pub fn run(a: RenderArgs) -> Result<(), CliError> {
         (None, Some(t)) => Budget::Time(t),
         (None, None) => Budget::SamplesPerPixel(16.0),
     };
-    let loaded = scene_arg::load(&a.scene)?;
-    let (scene, build_time) = scene_arg::build(&loaded, a.options.resolution, a.options.compact())?;
+    let mut loaded = scene_arg::load(&a.scene)?;
+    let (scene, build_time) =
+        scene_arg::build_taking(&mut loaded, a.options.resolution, a.options.compact())?;
     for note in &scene.notes {
         eprintln!("note: {note}");
     }

@@ -48,7 +48,8 @@ pub fn load(arg: &str) -> Result<Loaded, CliError> {
     })
 }
 
-/// Build the renderable scene, optionally at another resolution, its BVH `compact` or not.
+/// Build the renderable scene, optionally at another resolution, its BVH `compact` or not; the
+/// description stays.
 pub fn build(
     loaded: &Loaded,
     resolution: Option<(usize, usize)>,
@@ -56,6 +57,19 @@ pub fn build(
 ) -> Result<(Scene, Duration), CliError> {
     let t = Instant::now();
     let scene = Scene::with_bvh(&loaded.description, resolution, compact)?;
+    Ok((scene, t.elapsed()))
+}
+
+/// As [`build`], taking the description out of `loaded` ([`Scene::from_description`]: a large
+/// mesh's description is released before the BVH is finished, which lowers the peak memory).
+pub fn build_taking(
+    loaded: &mut Loaded,
+    resolution: Option<(usize, usize)>,
+    compact: Compact,
+) -> Result<(Scene, Duration), CliError> {
+    let t = Instant::now();
+    let description = std::mem::take(&mut loaded.description);
+    let scene = Scene::from_description(description, resolution, compact)?;
     Ok((scene, t.elapsed()))
 }
 
