@@ -527,6 +527,19 @@ fn triangle_shading(mesh: &MeshDesc, tri: [u32; 3], n: DVec3) -> Result<Option<T
     Ok(Some(TriangleShading { n: ns, s }))
 }
 
+/// Return the allocator's free pages to the system (glibc's `malloc_trim`). Between the tree's
+/// build and its packets, most of what the parser and the builder allocated is free, but glibc
+/// keeps freed blocks of its main heap resident: on the benchmarks' 1M-triangle terrain 60 MB,
+/// which the packets would then have come on top of (peak 233 MB instead of the build's 200 MB).
+/// Elsewhere a no-op.
+fn release_free_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: `malloc_trim` only releases memory no allocation holds.
+    unsafe {
+        libc::malloc_trim(0);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -617,18 +630,5 @@ mod tests {
         for m in [textured, white, two, spilled, textured_mix] {
             assert!(seen[m] > 20, "material {m} hit {} times", seen[m]);
         }
-    }
-}
-
-/// Return the allocator's free pages to the system (glibc's `malloc_trim`). Between the tree's
-/// build and its packets, most of what the parser and the builder allocated is free, but glibc
-/// keeps freed blocks of its main heap resident: on the benchmarks' 1M-triangle terrain 60 MB,
-/// which the packets would then have come on top of (peak 233 MB instead of the build's 200 MB).
-/// Elsewhere a no-op.
-fn release_free_memory() {
-    #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    // SAFETY: `malloc_trim` only releases memory no allocation holds.
-    unsafe {
-        libc::malloc_trim(0);
     }
 }
