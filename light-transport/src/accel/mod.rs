@@ -535,27 +535,17 @@ impl Bvh {
     ) -> Option<Hit> {
         let mut best: Option<((f64, f64, f64), u32)> = None;
         let mut best_t = t_max;
-        let mut ray = wide::WideRay::new(o.to_array(), d.to_array(), wide::traversal_t_max(t_max));
-        let packet_ray = packet::PacketRay::new(o, d);
-        let (mut fixed, mut heap) = (wide::FIXED, Vec::new());
-        let mut traversal = wide::Traversal::<V3, true>::new(&self.wide, &mut fixed, &mut heap);
-        while let Some(leaf) = traversal.next_leaf(&ray) {
-            let mut mask = self.packets.candidates::<V3>(leaf, &packet_ray, ray.t_max);
-            while mask != 0 {
-                let j = mask.trailing_zeros();
-                mask &= mask - 1;
-                let index = self.packets.index(leaf, j);
-                let primitive = &self.primitives[index as usize];
-                if index == leaves && primitive.is_triangle() {
-                    continue;
-                }
-                if let Some(h) = primitive.intersect_t(o, d, best_t) {
-                    best_t = h.0;
-                    best = Some((h, index));
-                    ray.t_max = wide::traversal_t_max(h.0);
-                }
+        self.candidates::<V3, true>(o, d, t_max, |index, primitive, bound| {
+            if index == leaves && primitive.is_triangle() {
+                return false;
             }
-        }
+            if let Some(h) = primitive.intersect_t(o, d, best_t) {
+                best_t = h.0;
+                best = Some((h, index));
+                *bound = wide::traversal_t_max(h.0);
+            }
+            false
+        });
         best.map(|(h, index)| self.hit_point(o, d, h, index))
     }
 
@@ -667,26 +657,50 @@ impl Bvh {
         t_max: f64,
         ends: [u32; 2],
     ) -> Option<u32> {
-        let ray = wide::WideRay::new(o.to_array(), d.to_array(), wide::traversal_t_max(t_max));
+        let mut blocker = None;
+        self.candidates::<V3, false>(o, d, t_max, |index, p, _| {
+            if (index == ends[0] || index == ends[1]) && p.is_triangle() {
+                return false;
+            }
+            let hit = p.hits(o, d, t_max);
+            if hit {
+                blocker = Some(index);
+            }
+            hit
+        });
+        blocker
+    }
+
+    /// The walk both queries share: every candidate (its index and primitive) of every leaf the
+    /// segment `o + t d`, `t ∈ (0, t_max)`, enters, in lane order per leaf, the leaves near to far
+    /// when `ORDERED`, until `test(index, primitive, bound)` returns true. `test` may lower the
+    /// traversal distance `bound` (to [`wide::traversal_t_max`] of a hit), which culls farther
+    /// leaves and the candidates beyond it. The traversal and packet tests are inlined here, so
+    /// they are compiled with the features of the copy of the query that calls it; `test`, with
+    /// no vector code, may stay a call.
+    #[inline(always)]
+    fn candidates<const V3: bool, const ORDERED: bool>(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        t_max: f64,
+        mut test: impl FnMut(u32, &Primitive, &mut f32) -> bool,
+    ) {
+        let mut ray = wide::WideRay::new(o.to_array(), d.to_array(), wide::traversal_t_max(t_max));
         let packet_ray = packet::PacketRay::new(o, d);
         let (mut fixed, mut heap) = (wide::FIXED, Vec::new());
-        let mut traversal = wide::Traversal::<V3, false>::new(&self.wide, &mut fixed, &mut heap);
+        let mut traversal = wide::Traversal::<V3, ORDERED>::new(&self.wide, &mut fixed, &mut heap);
         while let Some(leaf) = traversal.next_leaf(&ray) {
             let mut mask = self.packets.candidates::<V3>(leaf, &packet_ray, ray.t_max);
             while mask != 0 {
                 let j = mask.trailing_zeros();
                 mask &= mask - 1;
                 let index = self.packets.index(leaf, j);
-                let p = &self.primitives[index as usize];
-                if (index == ends[0] || index == ends[1]) && p.is_triangle() {
-                    continue;
-                }
-                if p.hits(o, d, t_max) {
-                    return Some(index);
+                if test(index, &self.primitives[index as usize], &mut ray.t_max) {
+                    return;
                 }
             }
         }
-        None
     }
 
     /// Bounds of everything.

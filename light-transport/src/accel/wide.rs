@@ -213,40 +213,150 @@ fn min(a: f32, b: f32) -> f32 {
     if a < b { a } else { b }
 }
 
+/// The vector operations the slab test needs, for SSE's four lanes and AVX's eight, so that
+/// both copies of the node test are one function ([`slab`]).
+#[cfg(target_arch = "x86_64")]
+trait Lanes: Copy {
+    /// Lanes per vector.
+    const N: usize;
+    /// # Safety
+    /// `p` points at `N` readable floats, and the CPU has the vector's features.
+    unsafe fn load(p: *const f32) -> Self;
+    /// # Safety
+    /// The CPU has the vector's features (the same for the others).
+    unsafe fn splat(x: f32) -> Self;
+    unsafe fn sub(a: Self, b: Self) -> Self;
+    unsafe fn mul(a: Self, b: Self) -> Self;
+    unsafe fn max(a: Self, b: Self) -> Self;
+    unsafe fn min(a: Self, b: Self) -> Self;
+    /// # Safety
+    /// `p` points at `N` writable floats, and the CPU has the vector's features.
+    unsafe fn store(p: *mut f32, a: Self);
+    /// The lanes where `a ≤ b` (ordered), as bits.
+    unsafe fn le_mask(a: Self, b: Self) -> u32;
+}
+
+/// [`Lanes`] for one vector type, from its intrinsics.
+#[cfg(target_arch = "x86_64")]
+macro_rules! lanes {
+    ($v:ident, $n:expr, $load:ident, $set1:ident, $sub:ident, $mul:ident, $max:ident, $min:ident,
+     $store:ident, $movemask:ident, $le:expr) => {
+        impl Lanes for std::arch::x86_64::$v {
+            const N: usize = $n;
+            #[inline(always)]
+            unsafe fn load(p: *const f32) -> Self {
+                unsafe { std::arch::x86_64::$load(p) }
+            }
+            #[inline(always)]
+            unsafe fn splat(x: f32) -> Self {
+                unsafe { std::arch::x86_64::$set1(x) }
+            }
+            #[inline(always)]
+            unsafe fn sub(a: Self, b: Self) -> Self {
+                unsafe { std::arch::x86_64::$sub(a, b) }
+            }
+            #[inline(always)]
+            unsafe fn mul(a: Self, b: Self) -> Self {
+                unsafe { std::arch::x86_64::$mul(a, b) }
+            }
+            #[inline(always)]
+            unsafe fn max(a: Self, b: Self) -> Self {
+                unsafe { std::arch::x86_64::$max(a, b) }
+            }
+            #[inline(always)]
+            unsafe fn min(a: Self, b: Self) -> Self {
+                unsafe { std::arch::x86_64::$min(a, b) }
+            }
+            #[inline(always)]
+            unsafe fn store(p: *mut f32, a: Self) {
+                unsafe { std::arch::x86_64::$store(p, a) }
+            }
+            #[inline(always)]
+            unsafe fn le_mask(a: Self, b: Self) -> u32 {
+                unsafe { std::arch::x86_64::$movemask($le(a, b)) as u32 }
+            }
+        }
+    };
+}
+
+#[cfg(target_arch = "x86_64")]
+lanes!(
+    __m128,
+    4,
+    _mm_loadu_ps,
+    _mm_set1_ps,
+    _mm_sub_ps,
+    _mm_mul_ps,
+    _mm_max_ps,
+    _mm_min_ps,
+    _mm_storeu_ps,
+    _mm_movemask_ps,
+    std::arch::x86_64::_mm_cmple_ps
+);
+
+#[cfg(target_arch = "x86_64")]
+lanes!(
+    __m256,
+    8,
+    _mm256_loadu_ps,
+    _mm256_set1_ps,
+    _mm256_sub_ps,
+    _mm256_mul_ps,
+    _mm256_max_ps,
+    _mm256_min_ps,
+    _mm256_storeu_ps,
+    _mm256_movemask_ps,
+    std::arch::x86_64::_mm256_cmp_ps::<{ std::arch::x86_64::_CMP_LE_OQ }>
+);
+
+/// The slab test of the node's children `first .. first + L::N` in one vector: their hit bits
+/// (shifted to `first`) into the mask, their entry distances into `t_near`, in the operations
+/// and order of [`node_test_lanes`].
+///
+/// # Safety
+/// The CPU has `L`'s features (and `first + L::N ≤ WIDTH`, checked in debug builds).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn slab<L: Lanes>(
+    node: &WideNode,
+    ray: &WideRay,
+    first: usize,
+    t_near: &mut [f32; WIDTH],
+) -> u32 {
+    debug_assert!(first + L::N <= WIDTH);
+    // SAFETY: `p` is one of the ray's plane indices (below 6), and each load reads `L::N` of
+    // its plane's eight floats from `first`; the store writes `L::N` of `t_near`'s.
+    unsafe {
+        let plane = |p: usize| L::load(node.planes.get_unchecked(p).as_ptr().add(first));
+        let t = |axis: usize, p: usize, o: &[f32; 3]| {
+            L::mul(L::sub(plane(p), L::splat(o[axis])), L::splat(ray.rd[axis]))
+        };
+        let nx = t(0, ray.near[0], &ray.o_near);
+        let ny = t(1, ray.near[1], &ray.o_near);
+        let nz = t(2, ray.near[2], &ray.o_near);
+        let fx = t(0, ray.far[0], &ray.o_far);
+        let fy = t(1, ray.far[1], &ray.o_far);
+        let fz = t(2, ray.far[2], &ray.o_far);
+        let near = L::max(L::max(nx, ny), L::max(nz, L::splat(0.0)));
+        let far = L::min(
+            L::mul(L::min(L::min(fx, fy), fz), L::splat(EXIT_SCALE)),
+            L::splat(ray.t_max),
+        );
+        L::store(t_near.as_mut_ptr().add(first), near);
+        L::le_mask(near, far) << first
+    }
+}
+
 /// The node test in two SSE halves (baseline x86-64).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn node_test_sse(node: &WideNode, ray: &WideRay) -> (u32, [f32; WIDTH]) {
-    use std::arch::x86_64::*;
+    use std::arch::x86_64::__m128;
     let mut t_near = [0.0f32; WIDTH];
-    let mut mask = 0;
-    // SAFETY: SSE and SSE2 are part of baseline x86-64; every load reads four of a plane's
-    // eight floats and every store writes four of `t_near`'s.
-    unsafe {
-        for half in 0..2 {
-            let lane = 4 * half;
-            let plane = |p: usize| _mm_loadu_ps(node.planes.get_unchecked(p).as_ptr().add(lane));
-            let t = |axis: usize, p: usize, o: &[f32; 3]| {
-                _mm_mul_ps(
-                    _mm_sub_ps(plane(p), _mm_set1_ps(o[axis])),
-                    _mm_set1_ps(ray.rd[axis]),
-                )
-            };
-            let nx = t(0, ray.near[0], &ray.o_near);
-            let ny = t(1, ray.near[1], &ray.o_near);
-            let nz = t(2, ray.near[2], &ray.o_near);
-            let fx = t(0, ray.far[0], &ray.o_far);
-            let fy = t(1, ray.far[1], &ray.o_far);
-            let fz = t(2, ray.far[2], &ray.o_far);
-            let near = _mm_max_ps(_mm_max_ps(nx, ny), _mm_max_ps(nz, _mm_setzero_ps()));
-            let far = _mm_min_ps(
-                _mm_mul_ps(_mm_min_ps(_mm_min_ps(fx, fy), fz), _mm_set1_ps(EXIT_SCALE)),
-                _mm_set1_ps(ray.t_max),
-            );
-            _mm_storeu_ps(t_near.as_mut_ptr().add(lane), near);
-            mask |= (_mm_movemask_ps(_mm_cmple_ps(near, far)) as u32) << lane;
-        }
-    }
+    // SAFETY: SSE is part of baseline x86-64; the halves are children 0–3 and 4–7.
+    let mask = unsafe {
+        slab::<__m128>(node, ray, 0, &mut t_near) | slab::<__m128>(node, ray, 4, &mut t_near)
+    };
     (mask, t_near)
 }
 
@@ -258,42 +368,10 @@ fn node_test_sse(node: &WideNode, ray: &WideRay) -> (u32, [f32; WIDTH]) {
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 unsafe fn node_test_v3(node: &WideNode, ray: &WideRay) -> (u32, [f32; WIDTH]) {
-    // SAFETY: the caller guarantees the features; the loads' alignment is below.
-    unsafe {
-        use std::arch::x86_64::*;
-        let mut t_near = [0.0f32; WIDTH];
-        // SAFETY: the node is 32-byte aligned and each plane is eight floats at a multiple of 32
-        // bytes into it.
-        // (`p` is one of the ray's plane indices, below 6.)
-        let plane = |p: usize| _mm256_load_ps(node.planes.get_unchecked(p).as_ptr());
-        let t = |axis: usize, p: usize, o: &[f32; 3]| {
-            _mm256_mul_ps(
-                _mm256_sub_ps(plane(p), _mm256_set1_ps(o[axis])),
-                _mm256_set1_ps(ray.rd[axis]),
-            )
-        };
-        let nx = t(0, ray.near[0], &ray.o_near);
-        let ny = t(1, ray.near[1], &ray.o_near);
-        let nz = t(2, ray.near[2], &ray.o_near);
-        let fx = t(0, ray.far[0], &ray.o_far);
-        let fy = t(1, ray.far[1], &ray.o_far);
-        let fz = t(2, ray.far[2], &ray.o_far);
-        let near = _mm256_max_ps(
-            _mm256_max_ps(nx, ny),
-            _mm256_max_ps(nz, _mm256_setzero_ps()),
-        );
-        let far = _mm256_min_ps(
-            _mm256_mul_ps(
-                _mm256_min_ps(_mm256_min_ps(fx, fy), fz),
-                _mm256_set1_ps(EXIT_SCALE),
-            ),
-            _mm256_set1_ps(ray.t_max),
-        );
-        // `t_near` holds eight floats.
-        _mm256_storeu_ps(t_near.as_mut_ptr(), near);
-        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as u32;
-        (mask, t_near)
-    }
+    let mut t_near = [0.0f32; WIDTH];
+    // SAFETY: the caller guarantees the features; one vector holds all eight children.
+    let mask = unsafe { slab::<std::arch::x86_64::__m256>(node, ray, 0, &mut t_near) };
+    (mask, t_near)
 }
 
 /// The node test of the copy `V3` names.
