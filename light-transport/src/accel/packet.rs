@@ -26,11 +26,20 @@ use crate::math::DVec3;
 /// Lanes of a packet.
 pub const LANES: usize = 8;
 
-/// Fields per lane: `v₀`, `e₁ = v₁ − v₀`, `e₂ = v₂ − v₀`, three each. A sphere's lane holds its
-/// centre, its radius as `e₁`'s x, and a NaN as `e₂`'s x, which marks it. (The primitive indices
-/// are kept apart: as floats their bits would be subnormal numbers, which the lanes past a leaf's
-/// last read, and subnormal arithmetic is slow.)
-const FIELDS: usize = 9;
+/// Fields per lane: `v₀`, `e₁ = v₁ − v₀`, `e₂ = v₂ − v₀`, three each, then the two norms the
+/// error bounds use, `|v₀|∞` and `E = max(|e₁|∞, |e₂|∞)`, of those f32 copies (stored, since they
+/// depend on the lane alone: the filter would otherwise spend 16 of its vector operations on
+/// them). A sphere's lane holds its centre, its radius as `e₁`'s x, a NaN as `e₂`'s x, which
+/// marks it, and `|c|∞` as the first norm. (The primitive indices are kept apart: as floats
+/// their bits would be subnormal numbers, which the lanes past a leaf's last read, and
+/// subnormal arithmetic is slow.)
+const FIELDS: usize = 11;
+
+/// The field of `|v₀|∞` (a sphere's `|c|∞`).
+const V0_NORM: usize = 9;
+
+/// The field of the larger edge's `|·|∞` (0 for a sphere).
+const EDGE: usize = 10;
 
 /// The error bounds' constant (see the module comment), times `ε = 2⁻²³`.
 const K_EPS: f32 = 64.0 * f32::EPSILON;
@@ -143,6 +152,16 @@ impl Packets {
                 field(6, f32::NAN);
                 special = true;
             }
+            // The norms, from the f32 copies just stored.
+            let read = |f: usize| self.data[base + f * n + j];
+            let triple = |f: usize| [read(f), read(f + 1), read(f + 2)];
+            let (v0_norm, edge) = if sphere.is_some() {
+                (norm(triple(0)), 0.0)
+            } else {
+                (norm(triple(0)), norm(triple(3)).max(norm(triple(6))))
+            };
+            self.data[base + V0_NORM * n + j] = v0_norm;
+            self.data[base + EDGE * n + j] = edge;
             if *index != at + j as u32 && self.index.is_empty() {
                 // The first lane that is not its own primitive: list every lane from here on.
                 self.index.extend(0..at + j as u32);
@@ -194,10 +213,12 @@ fn candidates_lanes(block: &[f32], n: usize, ray: &PacketRay, t_max: f32) -> u32
     for j in 0..n {
         let f = |k: usize| block[k * n + j];
         let v0 = [f(0), f(1), f(2)];
+        let norms = (f(V0_NORM), f(EDGE));
         let candidate = if f(6).is_nan() {
-            sphere_candidate_lane(v0, f(3), ray, t_max)
+            sphere_candidate_lane(v0, f(3), norms.0, ray, t_max)
         } else {
-            triangle_candidate_lane(v0, [f(3), f(4), f(5)], [f(6), f(7), f(8)], ray, t_max)
+            let edges = [[f(3), f(4), f(5)], [f(6), f(7), f(8)]];
+            triangle_candidate_lane(v0, edges, norms, ray, t_max)
         };
         if candidate {
             mask |= 1 << j;
@@ -212,12 +233,12 @@ fn norm(v: [f32; 3]) -> f32 {
     v[0].abs().max(v[1].abs()).max(v[2].abs())
 }
 
-/// The triangle filter of one lane (module comment).
+/// The triangle filter of one lane (module comment), with its stored norms `(|v₀|∞, E)`.
 #[inline(always)]
 fn triangle_candidate_lane(
     v0: [f32; 3],
-    e1: [f32; 3],
-    e2: [f32; 3],
+    [e1, e2]: [[f32; 3]; 2],
+    (v0_norm, edge): (f32, f32),
     ray: &PacketRay,
     t_max: f32,
 ) -> bool {
@@ -237,8 +258,7 @@ fn triangle_candidate_lane(
     let qv = cross(tv, e1);
     let v = dot(d, qv);
     let tdet = dot(e2, qv);
-    let edge = norm(e1).max(norm(e2));
-    let m_uv = K_EPS * (ray.o_norm + norm(v0)) * edge;
+    let m_uv = K_EPS * (ray.o_norm + v0_norm) * edge;
     let m_det = K_EPS * edge * edge;
     let m_t = m_uv * edge;
     let a = det.abs();
@@ -255,9 +275,9 @@ fn triangle_candidate_lane(
 /// The sphere filter of one lane: the ray's line passes within the radius of the centre, and
 /// the segment overlaps the chord, each within the bound `K ε (|o|∞ + |c|∞ + r)` of the rounding
 /// of the f32 copies and the arithmetic (the f64 test finds roots in `(0, t_max)` of the line
-/// within `r` of the centre). An infinite radius passes every ray.
+/// within `r` of the centre). An infinite radius passes every ray. `c_norm` is the stored `|c|∞`.
 #[inline(always)]
-fn sphere_candidate_lane(c: [f32; 3], r: f32, ray: &PacketRay, t_max: f32) -> bool {
+fn sphere_candidate_lane(c: [f32; 3], r: f32, c_norm: f32, ray: &PacketRay, t_max: f32) -> bool {
     let (o, d) = (ray.o, ray.d);
     let w = [c[0] - o[0], c[1] - o[1], c[2] - o[2]];
     let x = [
@@ -266,7 +286,7 @@ fn sphere_candidate_lane(c: [f32; 3], r: f32, ray: &PacketRay, t_max: f32) -> bo
         w[0] * d[1] - w[1] * d[0],
     ];
     let tc = w[0] * d[0] + w[1] * d[1] + w[2] * d[2];
-    let reach = r + K_EPS * (ray.o_norm + norm(c) + r);
+    let reach = r + K_EPS * (ray.o_norm + c_norm + r);
     x[0] * x[0] + x[1] * x[1] + x[2] * x[2] <= reach * reach
         && tc + reach > 0.0
         && tc - reach < t_max
@@ -306,7 +326,6 @@ unsafe fn candidates_v3(
         let dot = |ax, ay, az, bx, by, bz| {
             _mm256_fmadd_ps(az, bz, _mm256_fmadd_ps(ay, by, _mm256_mul_ps(ax, bx)))
         };
-        let max3 = |x, y, z| _mm256_max_ps(_mm256_max_ps(abs(x), abs(y)), abs(z));
         let pvx = msub(dy, e2z, dz, e2y);
         let pvy = msub(dz, e2x, dx, e2z);
         let pvz = msub(dx, e2y, dy, e2x);
@@ -317,8 +336,7 @@ unsafe fn candidates_v3(
         let qvz = msub(tvx, e1y, tvy, e1x);
         let v = dot(dx, dy, dz, qvx, qvy, qvz);
         let tdet = dot(e2x, e2y, e2z, qvx, qvy, qvz);
-        let edge = _mm256_max_ps(max3(e1x, e1y, e1z), max3(e2x, e2y, e2z));
-        let v0_norm = max3(v0x, v0y, v0z);
+        let (v0_norm, edge) = (f(V0_NORM), f(EDGE));
         let k = splat(K_EPS);
         let m_uv = _mm256_mul_ps(
             _mm256_mul_ps(k, _mm256_add_ps(splat(ray.o_norm), v0_norm)),
