@@ -155,10 +155,11 @@ impl Packets {
             // The norms, from the f32 copies just stored.
             let read = |f: usize| self.data[base + f * n + j];
             let triple = |f: usize| [read(f), read(f + 1), read(f + 2)];
-            let (v0_norm, edge) = if sphere.is_some() {
-                (norm(triple(0)), 0.0)
+            let v0_norm = norm(triple(0));
+            let edge = if sphere.is_some() {
+                0.0
             } else {
-                (norm(triple(0)), norm(triple(3)).max(norm(triple(6))))
+                norm(triple(3)).max(norm(triple(6)))
             };
             self.data[base + V0_NORM * n + j] = v0_norm;
             self.data[base + EDGE * n + j] = edge;
