@@ -7,14 +7,9 @@
 use crate::math::DVec3;
 
 /// A box is split while its half surface area exceeds this multiple of the area of the part of
-/// the triangle inside it (a triangle in an axis-aligned plane with axis-aligned legs scores 2; on `veach-bidir`, 8 adds 38% more
-/// references and cuts primitive tests per ray from 19.6 to 6.4).
-fn waste() -> f64 {
-    std::env::var("CHARTED_WASTE")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(8.0)
-}
+/// the triangle inside it (a triangle in an axis-aligned plane with axis-aligned legs scores 2; on
+/// `veach-bidir`, 8 adds 38% more references and cuts primitive tests per ray from 19.6 to 6.4).
+const WASTE: f64 = 8.0;
 /// Largest number of halvings: at most `2^MAX_DEPTH` references per triangle.
 const MAX_DEPTH: u32 = 5;
 
@@ -63,7 +58,7 @@ fn split(poly: Vec<DVec3>, depth: u32, out: &mut Vec<(DVec3, DVec3)>) {
         return;
     }
     let (lo, hi) = bounds(&poly);
-    if depth == MAX_DEPTH || half_area(lo, hi) <= waste() * polygon_area(&poly) {
+    if depth == MAX_DEPTH || half_area(lo, hi) <= WASTE * polygon_area(&poly) {
         out.push((lo, hi));
         return;
     }
@@ -85,7 +80,7 @@ fn split(poly: Vec<DVec3>, depth: u32, out: &mut Vec<(DVec3, DVec3)>) {
 pub fn triangle_boxes(p: [DVec3; 3], out: &mut Vec<(DVec3, DVec3)>) {
     let whole = bounds(&p);
     let area = polygon_area(&p);
-    if !(area > 0.0 && area.is_finite()) || half_area(whole.0, whole.1) <= waste() * area {
+    if !(area > 0.0 && area.is_finite()) || half_area(whole.0, whole.1) <= WASTE * area {
         out.push(whole);
         return;
     }

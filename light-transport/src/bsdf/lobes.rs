@@ -238,6 +238,35 @@ pub struct Lobe {
     pub weight: Weight,
 }
 
+impl Lobe {
+    /// `P_j(wo) pdf_j(wo, wi)` of this lobe chosen with probability `pj` (0 for a delta lobe).
+    #[inline]
+    pub fn pdf_term(&self, pj: f64, wo: DVec3, wi: DVec3) -> f64 {
+        if pj > 0.0 && !self.kind.is_delta() {
+            pj * self.kind.pdf(wo, wi)
+        } else {
+            0.0
+        }
+    }
+
+    /// `(scale f(wo, wi), P_j(wo) pdf(wo, wi))` of this lobe chosen with probability `pj`, the
+    /// lobe evaluated once for both; `None` for a delta lobe.
+    #[inline]
+    pub fn eval_pdf_term(
+        &self,
+        pj: f64,
+        wo: DVec3,
+        wi: DVec3,
+        mode: TransportMode,
+    ) -> Option<(Rgb, f64)> {
+        if self.kind.is_delta() {
+            return None;
+        }
+        let (f, pdf) = self.kind.eval_pdf(wo, wi, mode);
+        Some((self.scale * f, if pj > 0.0 { pj * pdf } else { 0.0 }))
+    }
+}
+
 const EMPTY: Lobe = Lobe {
     kind: LobeKind::Lambert(Lambert { r: Rgb::BLACK }),
     scale: Rgb::BLACK,
@@ -384,19 +413,35 @@ impl Lobes {
         }
     }
 
+    /// `P_0(wo)` of the only lobe `l` of a one-lobe list: its group's sum is its own weight; the
+    /// arithmetic of [`Lobes::probabilities`] without the per-group sums.
+    #[inline]
+    fn single_probability(&self, l: &Lobe, wo: DVec3) -> f64 {
+        let v = l.weight.at(wo);
+        let s = if v.is_finite() && v > 0.0 { v } else { 0.0 };
+        if s > 0.0 {
+            self.group_prob[l.group] * s / s
+        } else {
+            0.0
+        }
+    }
+
+    /// The lobe of a one-lobe list (most materials) and its probability `P_0(wo)`, bit for bit
+    /// `probabilities(wo)[0]`; `None` for other lists. Callers evaluate the one lobe directly,
+    /// without the per-lobe arrays.
+    #[inline]
+    pub fn single(&self, wo: DVec3) -> Option<(&Lobe, f64)> {
+        let [l] = self.as_slice() else {
+            return None;
+        };
+        Some((l, self.single_probability(l, wo)))
+    }
+
     /// `P_j(wo)` for every lobe.
     pub fn probabilities(&self, wo: DVec3) -> Probabilities {
         let mut w = [0.0; MAX_LOBES];
         if let [l] = self.as_slice() {
-            // One lobe (most materials): its group's sum is its own weight; the same arithmetic
-            // as below, without the per-group sums.
-            let v = l.weight.at(wo);
-            let s = if v.is_finite() && v > 0.0 { v } else { 0.0 };
-            w[0] = if s > 0.0 {
-                self.group_prob[l.group] * s / s
-            } else {
-                0.0
-            };
+            w[0] = self.single_probability(l, wo);
             return w;
         }
         let mut sums = [0.0; MAX_LOBES];
@@ -476,9 +521,7 @@ impl Lobes {
     pub fn pdf_terms(&self, p: &Probabilities, wo: DVec3, wi: DVec3) -> Probabilities {
         let mut t = [0.0; MAX_LOBES];
         for (j, l) in self.as_slice().iter().enumerate() {
-            if p[j] > 0.0 && !l.kind.is_delta() {
-                t[j] = p[j] * l.kind.pdf(wo, wi);
-            }
+            t[j] = l.pdf_term(p[j], wo, wi);
         }
         t
     }
@@ -495,13 +538,9 @@ impl Lobes {
         let mut f = Rgb::BLACK;
         let mut t = [0.0; MAX_LOBES];
         for (j, l) in self.as_slice().iter().enumerate() {
-            if l.kind.is_delta() {
-                continue;
-            }
-            let (fj, pdf) = l.kind.eval_pdf(wo, wi, mode);
-            f += l.scale * fj;
-            if p[j] > 0.0 {
-                t[j] = p[j] * pdf;
+            if let Some((fj, tj)) = l.eval_pdf_term(p[j], wo, wi, mode) {
+                f += fj;
+                t[j] = tj;
             }
         }
         (f, t)

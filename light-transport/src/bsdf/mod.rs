@@ -181,6 +181,16 @@ impl Clone for Bsdf {
 }
 
 /// A world direction in the local frame, normalised; `None` when degenerate.
+/// The sum of density terms, non-finite terms and totals counted as 0.
+#[inline]
+fn finite_total(terms: &[f64]) -> f64 {
+    let total: f64 = terms
+        .iter()
+        .map(|&w| if w.is_finite() { w } else { 0.0 })
+        .sum();
+    if total.is_finite() { total } else { 0.0 }
+}
+
 fn local(frame: &Frame, w: DVec3) -> Option<DVec3> {
     let l = frame.to_local(w);
     let len2 = l.length_squared();
@@ -320,6 +330,15 @@ impl Bsdf {
             let t = self.lobes.delta_terms(&p, wo, wl, mode);
             t.iter()
                 .fold((Rgb::BLACK, 0.0), |(f, q), (tf, tq)| (f + *tf, q + tq))
+        } else if let [lobe] = self.lobes.as_slice() {
+            // One lobe: the sum below is its term (or zero, which is refused either way).
+            let mut f = Rgb::BLACK;
+            let mut t = 0.0;
+            if let Some((fj, tj)) = lobe.eval_pdf_term(p[0], wo, wl, mode) {
+                f += fj;
+                t = tj;
+            }
+            (f, t)
         } else {
             let (f, t) = self.lobes.eval_pdf_terms(&p, wo, wl, mode);
             (f, t.iter().sum())
@@ -357,6 +376,9 @@ impl Bsdf {
     /// [`Bsdf::pdf`] of the pair.
     #[inline]
     pub fn pdf_local(&self, l: LocalPair) -> f64 {
+        if let Some((lobe, p)) = self.lobes.single(l.wo) {
+            return finite_total(&[lobe.pdf_term(p, l.wo, l.wi)]);
+        }
         let p = self.lobes.probabilities(l.wo);
         self.finite_total(&self.lobes.pdf_terms(&p, l.wo, l.wi))
     }
@@ -364,17 +386,25 @@ impl Bsdf {
     /// The sum of the lobes' density terms, non-finite terms and totals counted as 0.
     #[inline]
     fn finite_total(&self, terms: &lobes::Probabilities) -> f64 {
-        let total: f64 = terms[..self.lobes.as_slice().len()]
-            .iter()
-            .map(|&w| if w.is_finite() { w } else { 0.0 })
-            .sum();
-        if total.is_finite() { total } else { 0.0 }
+        finite_total(&terms[..self.lobes.as_slice().len()])
     }
 
     /// `(`[`Bsdf::eval_local`]`, `[`Bsdf::pdf_local`]`)` of the pair, bit for bit, each lobe
     /// evaluated once for both.
     #[inline]
     pub fn eval_pdf_local(&self, l: LocalPair, mode: TransportMode) -> (Rgb, f64) {
+        if let Some((lobe, p)) = self.lobes.single(l.wo) {
+            let mut f = Rgb::BLACK;
+            let mut t = 0.0;
+            if let Some((fj, tj)) = lobe.eval_pdf_term(p, l.wo, l.wi, mode) {
+                f += fj;
+                t = tj;
+            }
+            return (
+                if f.is_finite() { f } else { Rgb::BLACK },
+                finite_total(&[t]),
+            );
+        }
         let p = self.lobes.probabilities(l.wo);
         let (f, terms) = self.lobes.eval_pdf_terms(&p, l.wo, l.wi, mode);
         (
