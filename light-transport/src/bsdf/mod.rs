@@ -180,7 +180,6 @@ impl Clone for Bsdf {
     }
 }
 
-/// A world direction in the local frame, normalised; `None` when degenerate.
 /// The sum of density terms, non-finite terms and totals counted as 0.
 #[inline]
 fn finite_total(terms: &[f64]) -> f64 {
@@ -191,6 +190,7 @@ fn finite_total(terms: &[f64]) -> f64 {
     if total.is_finite() { total } else { 0.0 }
 }
 
+/// A world direction in the local frame, normalised; `None` when degenerate.
 fn local(frame: &Frame, w: DVec3) -> Option<DVec3> {
     let l = frame.to_local(w);
     let len2 = l.length_squared();
