@@ -265,6 +265,19 @@ impl Lobe {
         let (f, pdf) = self.kind.eval_pdf(wo, wi, mode);
         Some((self.scale * f, if pj > 0.0 { pj * pdf } else { 0.0 }))
     }
+
+    /// [`Lobes::eval_pdf_terms`] of a one-lobe BSDF, bit for bit: the lobe's value added to
+    /// black and its density term, `(black, 0)` for a delta lobe.
+    #[inline]
+    pub fn eval_pdf_sum(&self, pj: f64, wo: DVec3, wi: DVec3, mode: TransportMode) -> (Rgb, f64) {
+        let mut f = Rgb::BLACK;
+        let mut t = 0.0;
+        if let Some((fj, tj)) = self.eval_pdf_term(pj, wo, wi, mode) {
+            f += fj;
+            t = tj;
+        }
+        (f, t)
+    }
 }
 
 const EMPTY: Lobe = Lobe {

@@ -332,13 +332,7 @@ impl Bsdf {
                 .fold((Rgb::BLACK, 0.0), |(f, q), (tf, tq)| (f + *tf, q + tq))
         } else if let [lobe] = self.lobes.as_slice() {
             // One lobe: the sum below is its term (or zero, which is refused either way).
-            let mut f = Rgb::BLACK;
-            let mut t = 0.0;
-            if let Some((fj, tj)) = lobe.eval_pdf_term(p[0], wo, wl, mode) {
-                f += fj;
-                t = tj;
-            }
-            (f, t)
+            lobe.eval_pdf_sum(p[0], wo, wl, mode)
         } else {
             let (f, t) = self.lobes.eval_pdf_terms(&p, wo, wl, mode);
             (f, t.iter().sum())
@@ -394,12 +388,7 @@ impl Bsdf {
     #[inline]
     pub fn eval_pdf_local(&self, l: LocalPair, mode: TransportMode) -> (Rgb, f64) {
         if let Some((lobe, p)) = self.lobes.single(l.wo) {
-            let mut f = Rgb::BLACK;
-            let mut t = 0.0;
-            if let Some((fj, tj)) = lobe.eval_pdf_term(p, l.wo, l.wi, mode) {
-                f += fj;
-                t = tj;
-            }
+            let (f, t) = lobe.eval_pdf_sum(p, l.wo, l.wi, mode);
             return (
                 if f.is_finite() { f } else { Rgb::BLACK },
                 finite_total(&[t]),
