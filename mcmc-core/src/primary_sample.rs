@@ -162,8 +162,36 @@ impl PrimarySample {
     }
 
     /// Coordinate `index` of `stream`, created or brought up to date on demand.
+    ///
+    /// The common cases are inlined into the caller: the next new coordinate of a stream (most of
+    /// what a bootstrap sample reads) and a coordinate already current. The rest (skipped, stale
+    /// or out-of-range coordinates, a stream's first read) are in [`PrimarySample::get_rest`],
+    /// whose work would otherwise make every call pay its register saves.
     #[inline]
     pub fn get(&mut self, stream: usize, index: usize) -> f64 {
+        if let Some(st) = self.streams.get_mut(stream) {
+            let len = st.values.len();
+            if index == len && len < st.values.capacity() {
+                let v = uniform(&mut self.rng);
+                st.values.push(v);
+                st.modified.push(self.iteration);
+                return v;
+            }
+            // Current: neither skipped (`u64::MAX`), nor older than the last large step, nor
+            // behind on small steps.
+            if index < len {
+                let m = st.modified[index];
+                if m == self.iteration && m != u64::MAX && m >= self.last_large {
+                    return st.values[index];
+                }
+            }
+        }
+        self.get_rest(stream, index)
+    }
+
+    /// [`PrimarySample::get`] in full.
+    #[inline(never)]
+    fn get_rest(&mut self, stream: usize, index: usize) -> f64 {
         let Some(st) = self.streams.get_mut(stream) else {
             return 0.5; // out-of-range stream: callers are expected to stay within stream_count
         };
