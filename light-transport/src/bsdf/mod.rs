@@ -192,9 +192,7 @@ fn finite_total(terms: &[f64]) -> f64 {
 
 /// A world direction in the local frame, normalised; `None` when degenerate.
 fn local(frame: &Frame, w: DVec3) -> Option<DVec3> {
-    let l = frame.to_local(w);
-    let len2 = l.length_squared();
-    (len2 > 0.0 && len2.is_finite()).then(|| l / len2.sqrt())
+    crate::math::renormalize(frame.to_local(w))
 }
 
 impl Bsdf {
