@@ -98,6 +98,103 @@ fn up(x: f64) -> f32 {
     if f64::from(y) < x { y.next_up() } else { y }
 }
 
+/// What a lane holds, field by field ([`FIELDS`]), and whether it is *special* (a sphere or a
+/// forced candidate, which the filter must be told of).
+pub type LaneFields = ([f32; FIELDS], bool);
+
+/// The fields of one lane: a triangle's f32 vertex and edges (the edges from the f64 vertices),
+/// or a sphere's centre and radius with a NaN as `e₂`'s x; a primitive too large for f32
+/// arithmetic becomes a sphere of infinite radius. Then the two norms, from those f32 copies.
+pub fn lane_fields(lane: &Lane) -> LaneFields {
+    let mut field = [0.0f32; FIELDS];
+    let fits = |v: &DVec3| v.is_finite() && v.abs().max_element() < LARGEST;
+    let sphere = match lane {
+        Lane::Triangle(p) => {
+            let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
+            if [p[0], e1, e2].iter().all(fits) {
+                for (k, v) in [p[0], e1, e2].iter().enumerate() {
+                    field[3 * k] = v.x as f32;
+                    field[3 * k + 1] = v.y as f32;
+                    field[3 * k + 2] = v.z as f32;
+                }
+                None
+            } else {
+                Some((DVec3::ZERO, f32::INFINITY))
+            }
+        }
+        Lane::Sphere(c, r) => Some(if fits(c) && r.abs() < LARGEST {
+            (*c, up(r.abs()))
+        } else {
+            (DVec3::ZERO, f32::INFINITY)
+        }),
+    };
+    if let Some((c, r)) = sphere {
+        field[0] = c.x as f32;
+        field[1] = c.y as f32;
+        field[2] = c.z as f32;
+        field[3] = r;
+        field[6] = f32::NAN;
+    }
+    let triple = |f: usize| [field[f], field[f + 1], field[f + 2]];
+    let v0_norm = norm(triple(0));
+    let edge = if sphere.is_some() {
+        0.0
+    } else {
+        norm(triple(3)).max(norm(triple(6)))
+    };
+    field[V0_NORM] = v0_norm;
+    field[EDGE] = edge;
+    (field, sphere.is_some())
+}
+
+/// Eight lanes held apart from the tree's packets, each set on its own (the shadow cache's
+/// occluders, `super::occluders`), filtered at once as a leaf's are.
+#[derive(Clone, Debug)]
+pub struct LoosePacket {
+    /// Field `f` of lane `j` at `f · LANES + j`, then the padding a vector load past the last
+    /// field reads.
+    data: [f32; FIELDS * LANES + LANES],
+    /// The lanes holding spheres or forced candidates.
+    special: u8,
+}
+
+impl LoosePacket {
+    /// Eight lanes of zeros, none special.
+    pub const fn new() -> Self {
+        Self {
+            data: [0.0; FIELDS * LANES + LANES],
+            special: 0,
+        }
+    }
+
+    /// Set lane `j` (below [`LANES`]).
+    pub fn set(&mut self, j: usize, (fields, special): &LaneFields) {
+        for (f, &v) in fields.iter().enumerate() {
+            self.data[f * LANES + j] = v;
+        }
+        self.special = self.special & !(1 << j) | u8::from(*special) << j;
+    }
+
+    /// The candidates among the eight lanes for hits of `ray` before `t_max` (a bound at or
+    /// above the f64 one), a bit per lane, as [`Packets::candidates`] gives a leaf's.
+    #[inline(always)]
+    pub fn candidates<const V3: bool>(&self, ray: &PacketRay, t_max: f32) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        if V3 {
+            // SAFETY: `V3` is set only by the x86-64-v3 copies of the queries, which run only
+            // when the CPU has their features; `data` holds `FIELDS · LANES + LANES` floats.
+            return unsafe { candidates_v3(&self.data, LANES, self.special != 0, ray, t_max) };
+        }
+        candidates_lanes(&self.data, LANES, ray, t_max)
+    }
+}
+
+impl Default for LoosePacket {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl Packets {
     /// Storage for `lanes` lanes in all, allocated once.
     pub fn with_capacity(lanes: usize) -> Self {
@@ -121,48 +218,11 @@ impl Packets {
         self.data.resize(base + FIELDS * n + LANES, 0.0);
         let mut special = false;
         for (j, (index, lane)) in primitives.iter().enumerate() {
-            let mut field = |f: usize, v: f32| self.data[base + f * n + j] = v;
-            let fits = |v: &DVec3| v.is_finite() && v.abs().max_element() < LARGEST;
-            // A sphere's centre and radius, or a triangle's vertex and edges.
-            let sphere = match lane {
-                Lane::Triangle(p) => {
-                    let (e1, e2) = (p[1] - p[0], p[2] - p[0]);
-                    if [p[0], e1, e2].iter().all(fits) {
-                        for (k, v) in [p[0], e1, e2].iter().enumerate() {
-                            field(3 * k, v.x as f32);
-                            field(3 * k + 1, v.y as f32);
-                            field(3 * k + 2, v.z as f32);
-                        }
-                        None
-                    } else {
-                        Some((DVec3::ZERO, f32::INFINITY))
-                    }
-                }
-                Lane::Sphere(c, r) => Some(if fits(c) && r.abs() < LARGEST {
-                    (*c, up(r.abs()))
-                } else {
-                    (DVec3::ZERO, f32::INFINITY)
-                }),
-            };
-            if let Some((c, r)) = sphere {
-                field(0, c.x as f32);
-                field(1, c.y as f32);
-                field(2, c.z as f32);
-                field(3, r);
-                field(6, f32::NAN);
-                special = true;
+            let (fields, lane_special) = lane_fields(lane);
+            for (f, v) in fields.into_iter().enumerate() {
+                self.data[base + f * n + j] = v;
             }
-            // The norms, from the f32 copies just stored.
-            let read = |f: usize| self.data[base + f * n + j];
-            let triple = |f: usize| [read(f), read(f + 1), read(f + 2)];
-            let v0_norm = norm(triple(0));
-            let edge = if sphere.is_some() {
-                0.0
-            } else {
-                norm(triple(3)).max(norm(triple(6)))
-            };
-            self.data[base + V0_NORM * n + j] = v0_norm;
-            self.data[base + EDGE * n + j] = edge;
+            special |= lane_special;
             if *index != at + j as u32 && self.index.is_empty() {
                 // The first lane that is not its own primitive: list every lane from here on.
                 self.index.extend(0..at + j as u32);
