@@ -146,7 +146,7 @@ const NEAR_UNIT: f64 = 1e-8;
 /// A `v` already of unit length up to rounding (a unit direction brought into an orthonormal
 /// frame, [`Frame::to_local`]) is scaled by one Newton step of `1/√x` from `x = 1`, `1.5 − x/2`,
 /// accurate to below half an ulp there: as accurate as dividing by `√x`, without the square root
-/// and the division, whose latency every BSDF evaluation waited on twice (README: BDPT 1.041×
+/// and the division, whose latency every BSDF evaluation waited on twice (docs/performance.md: BDPT 1.041×
 /// faster side by side). Any other `v` is divided by its length.
 #[inline]
 pub fn renormalize(v: DVec3) -> Option<DVec3> {

@@ -260,7 +260,7 @@ pub enum Compact {
     No,
     /// Neighbouring triangles that fill one box share a reference (`PAIR`). On the
     /// benchmarks' 1M-triangle terrain: peak memory 0.93× (201 → 187 MB), build 0.67–0.74×,
-    /// rays/s 0.90–0.97× (README).
+    /// rays/s 0.90–0.97× (docs/performance.md).
     Pairs,
 }
 

@@ -25,7 +25,7 @@ pub type Splat = ([f64; 2], Rgb);
 ///
 /// Each buffer is allocated by its first deposit, so a film that only splats (a Metropolis
 /// render's chains) or only takes camera samples (path tracing, the Metropolis methods' direct
-/// pass) holds 24 or 32 bytes a pixel instead of 56 (README, issue 17).
+/// pass) holds 24 or 32 bytes a pixel instead of 56 (docs/performance.md).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Film {
     /// Width.
@@ -55,7 +55,7 @@ pub struct Film {
 /// refined scale differs from 1 by the normalisation's relative refinement (a few percent), so
 /// the f32 sum's rounding reaches the image damped by that factor, and a layer costs 12 bytes
 /// a pixel instead of 24: with one layer per path length (MMLT, path-space MLT) the layers are
-/// most of a Metropolis render's memory at high resolution (README, issue 17).
+/// most of a Metropolis render's memory at high resolution (docs/performance.md).
 #[derive(Clone, Debug, PartialEq)]
 struct Layer {
     scale: f64,

@@ -300,7 +300,7 @@ const SLICES: u64 = 8;
 /// buffers until it ends and enter the sink while the next slice runs, so two slices' deposits
 /// are held at a time and this bounds that memory: PSSMLT records every strategy of both states
 /// at every mutation, and rounds of an eighth of a render once held 0.5 GB of splats at
-/// 1920×1080 (README, issue 17).
+/// 1920×1080 (docs/performance.md).
 const SLICE_MUTATIONS: u64 = 1 << 16;
 const EXCHANGE: u64 = 0xE8C4;
 
@@ -514,7 +514,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
         // Two sets of deposit buffers: the chains record a slice into one while the deposits of
         // the slice before, in the other, enter the sink on the side (in chunk order, so the
         // image does not depend on the thread count). Absorbing them after each slice instead
-        // left all threads but one idle meanwhile: 8% of MMLT's time on `cornell` (README).
+        // left all threads but one idle meanwhile: 8% of MMLT's time on `cornell` (docs/performance.md).
         let mut recording: Vec<K::Chunk> = (0..n_chunks).map(|_| sink.chunk()).collect();
         let mut absorbing: Vec<K::Chunk> = (0..n_chunks).map(|_| sink.chunk()).collect();
         let slice = k.div_ceil(SLICES).min(SLICE_MUTATIONS / nchains).max(1);

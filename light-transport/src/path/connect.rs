@@ -69,7 +69,7 @@ pub fn connect(
 /// The segment is traced from the camera side: a light's surroundings (a lamp shade, a
 /// reflector) often fill the boxes around it and the light subpath's first vertices, and a
 /// traversal that starts among them has to clear them first. The answer is the same either way
-/// (images bit for bit alike); BDPT on `veach-bidir` ran 4.0% fewer instructions so (README).
+/// (images bit for bit alike); BDPT on `veach-bidir` ran 4.0% fewer instructions so (docs/performance.md).
 pub fn unoccluded(scene: &Scene, light: &Vertex, camera: &Vertex) -> bool {
     scene.visible(
         camera.p(),
