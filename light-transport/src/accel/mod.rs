@@ -739,8 +739,9 @@ impl Bvh {
         t_max: f64,
         mut test: impl FnMut(u32, &Primitive, &mut f32) -> bool,
     ) {
-        let mut ray = wide::WideRay::new(o.to_array(), d.to_array(), wide::traversal_t_max(t_max));
-        let packet_ray = packet::PacketRay::new(o, d);
+        let copies = wide::RayCopies::new(o.to_array(), d.to_array());
+        let mut ray = wide::WideRay::from_copies(&copies, wide::traversal_t_max(t_max));
+        let packet_ray = packet::PacketRay::from_copies(&copies);
         let (mut fixed, mut heap) = (wide::FIXED, Vec::new());
         let mut traversal = wide::Traversal::<V3, ORDERED>::new(&self.wide, &mut fixed, &mut heap);
         while let Some(leaf) = traversal.next_leaf(&ray) {

@@ -83,11 +83,16 @@ impl PacketRay {
     /// The ray `o + t d` (`d` a unit vector).
     #[inline(always)]
     pub fn new(o: DVec3, d: DVec3) -> Self {
-        let o_norm = o.abs().max_element() as f32;
+        Self::from_copies(&wide::RayCopies::new(o.to_array(), d.to_array()))
+    }
+
+    /// [`PacketRay::new`] from the ray's f32 copies.
+    #[inline(always)]
+    pub fn from_copies(copies: &wide::RayCopies) -> Self {
         Self {
-            o: [o.x as f32, o.y as f32, o.z as f32],
-            d: [d.x as f32, d.y as f32, d.z as f32],
-            o_norm: o_norm * (1.0 + f32::EPSILON),
+            o: copies.o,
+            d: copies.d,
+            o_norm: copies.largest * (1.0 + f32::EPSILON),
         }
     }
 }

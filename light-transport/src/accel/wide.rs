@@ -120,11 +120,48 @@ pub struct WideRay {
 /// with `u = 2⁻²⁴`), with a margin.
 const EXIT_SCALE: f32 = 1.0 + 4.0 * 3.0 * f32::EPSILON;
 
+/// A segment's f32 copies, which the node test ([`WideRay`]) and the packet test
+/// (`super::packet::PacketRay`) share: origin, direction and the origin's largest magnitude
+/// `|o|∞`, which is the f32 rounding of the f64 one (rounding keeps order and sign).
+#[derive(Clone, Copy, Debug)]
+pub struct RayCopies {
+    /// The origin, rounded to f32.
+    pub o: [f32; 3],
+    /// The direction, rounded to f32.
+    pub d: [f32; 3],
+    /// `|o|∞` of the rounded origin.
+    pub largest: f32,
+}
+
+impl RayCopies {
+    /// The copies of `o + t d`.
+    #[inline(always)]
+    pub fn new(o: [f64; 3], d: [f64; 3]) -> Self {
+        let o = o.map(|x| x as f32);
+        let a = o.map(f32::abs);
+        // Plain comparisons: no NaN arises from a finite origin (and a NaN origin hits nothing
+        // in the exact tests, whatever the traversal visits).
+        let max = |x: f32, y: f32| if x > y { x } else { y };
+        Self {
+            o,
+            d: d.map(|x| x as f32),
+            largest: max(max(a[0], a[1]), a[2]),
+        }
+    }
+}
+
 impl WideRay {
     /// The traversal of the f64 segment `o + t d`, `t ∈ (0, t_max)`, `t_max` already widened to
-    /// the traversal distance (`traversal_t_max`).
-    #[inline(always)]
+    /// the traversal distance (`traversal_t_max`). (The queries build theirs from the copies they
+    /// share with the packet test: [`WideRay::from_copies`].)
+    #[cfg(test)]
     pub fn new(o: [f64; 3], d: [f64; 3], t_max: f32) -> Self {
+        Self::from_copies(&RayCopies::new(o, d), t_max)
+    }
+
+    /// [`WideRay::new`] from the segment's f32 copies.
+    #[inline(always)]
+    pub fn from_copies(copies: &RayCopies, t_max: f32) -> Self {
         let mut ray = Self {
             near: [0; 3],
             far: [0; 3],
@@ -135,19 +172,18 @@ impl WideRay {
         };
         // How far the f32 origin may lie from the f64 one: half an ulp of its largest
         // coordinate, doubled.
-        let largest = o[0].abs().max(o[1].abs()).max(o[2].abs()) as f32;
-        let slack = largest * f32::EPSILON;
+        let slack = copies.largest * f32::EPSILON;
         for axis in 0..3 {
             // `+ 0.0` makes a negative zero positive; a direction this small is clamped so that
             // `1 / d` stays finite (the ray moves by less than 10⁻²⁰ per unit along it, far
             // inside the boxes' padding), so no product is `0 · ∞`.
-            let mut di = d[axis] as f32 + 0.0;
+            let mut di = copies.d[axis] + 0.0;
             if di.abs() < 1e-20 {
                 di = 1e-20f32.copysign(di);
             }
             let rd = 1.0 / di;
             let negative = rd < 0.0;
-            let oi = o[axis] as f32;
+            let oi = copies.o[axis];
             ray.near[axis] = 2 * axis + usize::from(negative);
             ray.far[axis] = 2 * axis + usize::from(!negative);
             // Entering: the box's near plane moved toward the ray, i.e. the origin moved away
