@@ -643,20 +643,41 @@ impl Bvh {
         if self.primitives.is_empty() {
             return false;
         }
+        let (fields, blocks) = self.occluder_tests(o, d, t_max, ends);
         occluders::occluded(
             self.id,
             |packet| self.filter_occluders(packet, o, d, t_max),
+            fields,
+            blocks,
+            || self.traverse_occluded(o, d, t_max, ends),
+        )
+    }
+
+    /// What the shadow cache asks of its primitives for the segment `o + t d`, `t ∈ (0, t_max)`,
+    /// between `ends`: primitive `i`'s packet lane, and whether it blocks the segment (`None`:
+    /// no such primitive). The ends' triangles, as in traversal, cannot block.
+    #[inline(always)]
+    #[allow(clippy::type_complexity)]
+    fn occluder_tests(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        t_max: f64,
+        ends: [u32; 2],
+    ) -> (
+        impl Fn(u32) -> Option<packet::LaneFields> + '_,
+        impl Fn(u32) -> Option<bool> + '_,
+    ) {
+        (
             |i| {
                 self.primitives
                     .get(i as usize)
                     .map(|p| packet::lane_fields(&p.lane()))
             },
-            |i| {
+            move |i| {
                 let p = self.primitives.get(i as usize)?;
-                // The ends' triangles, as in traversal, cannot block.
                 Some(!((i == ends[0] || i == ends[1]) && p.is_triangle()) && p.hits(o, d, t_max))
             },
-            || self.traverse_occluded(o, d, t_max, ends),
         )
     }
 
@@ -1233,20 +1254,15 @@ mod tests {
             let (mut differ, mut queries, mut skipped, mut all) = (0, 0, 0, 0);
             for &(o, d, t, ends) in &segments {
                 let tests = std::cell::Cell::new(0usize);
+                let (fields, test) = bvh.occluder_tests(o, d, t, ends);
                 let blocks = |i: u32| {
                     tests.set(tests.get() + 1);
-                    let p = bvh.primitives.get(i as usize)?;
-                    Some(!((i == ends[0] || i == ends[1]) && p.is_triangle()) && p.hits(o, d, t))
-                };
-                let fields = |i: u32| {
-                    bvh.primitives
-                        .get(i as usize)
-                        .map(|p| packet::lane_fields(&p.lane()))
+                    test(i)
                 };
                 let tested = filtered.tests_older();
-                let a = filtered.blocked(bvh.id, |p| filter(p, o, d, t), fields, blocks);
+                let a = filtered.blocked(bvh.id, |p| filter(p, o, d, t), &fields, blocks);
                 let filtered_tests = tests.replace(0);
-                let b = every.blocked(bvh.id, |_| u32::MAX, fields, blocks);
+                let b = every.blocked(bvh.id, |_| u32::MAX, &fields, blocks);
                 if tested {
                     queries += 1;
                     skipped += tests.get() - filtered_tests;
