@@ -185,7 +185,16 @@ impl Estimator for BdptMissingStrategies {
                     continue;
                 }
                 if let Some(c) = connect(scene, &light, &cam, s, t) {
-                    let w = mis_weight(scene, &light, &cam, s, t, self.0.heuristic);
+                    // The weight's own densities (not the connection's), as a check of that path.
+                    let w = mis_weight(
+                        scene,
+                        &light,
+                        &cam,
+                        s,
+                        t,
+                        self.0.heuristic,
+                        Default::default(),
+                    );
                     match c.raster {
                         Some(r) => splats.push((r, c.value * w)),
                         None => l += c.value * w,

@@ -1883,8 +1883,10 @@ fn radiance_compression_is_the_ratio_of_radiance_to_importance_transport() {
     assert!(checked > 300, "{checked} samples checked");
 }
 
-/// `Bsdf::pdf_pair` is two `Bsdf::pdf` calls, and `Bsdf::pdf` the total of `Bsdf::lobe_weights`,
-/// bit for bit, on every configuration: random pairs
+/// The densities of a pair in the BSDF's frame, both ways (`Bsdf::pdf_local` of a
+/// `Bsdf::local_pair` and of its reverse, as a connection's MIS weight takes them:
+/// `Vertex::connection_pdfs`), are two `Bsdf::pdf` calls, and `Bsdf::pdf` the total of
+/// `Bsdf::lobe_weights`, bit for bit, on every configuration: random pairs
 /// of directions on both sides and pairs the BSDF samples itself (so that sharp lobes give
 /// nonzero densities).
 #[test]
@@ -1903,7 +1905,9 @@ fn pdf_pair_is_both_pdfs() {
                 })
                 .flatten();
             let wb = sampled.map_or_else(|| b.frame.to_world(random_dir(&mut rng)), |s| s.wi);
-            let (ab, ba) = b.pdf_pair(wa, wb);
+            let (ab, ba) = b
+                .local_pair(wa, wb)
+                .map_or((0.0, 0.0), |l| (b.pdf_local(l), b.pdf_local(l.reversed())));
             assert_eq!(ab.to_bits(), b.pdf(wa, wb).to_bits(), "{}", case.name);
             assert_eq!(ba.to_bits(), b.pdf(wb, wa).to_bits(), "{}", case.name);
             // `pdf` (through `Bsdf::local_pair`) is the sum of the lobes' shares, as `invert`

@@ -419,16 +419,6 @@ impl Bsdf {
         self.local_pair(wo, wi).map_or(0.0, |l| self.pdf_local(l))
     }
 
-    /// `(pdf(a, b), pdf(b, a))`: both densities between two directions, bit for bit those of two
-    /// [`Bsdf::pdf`] calls, with the directions brought into the local frame once (a connection's
-    /// MIS weight needs both at each end: [`crate::path::mis_weight`]).
-    pub fn pdf_pair(&self, a: DVec3, b: DVec3) -> (f64, f64) {
-        let Some(l) = self.local_pair(a, b) else {
-            return (0.0, 0.0);
-        };
-        (self.pdf_local(l), self.pdf_local(l.reversed()))
-    }
-
     /// `(f, probability)` of the delta lobes producing `wi` from `wo`, as [`Bsdf::sample`] would
     /// report them; `None` when no delta lobe produces `wi`.
     pub fn eval_delta(&self, wo: DVec3, wi: DVec3, mode: TransportMode) -> Option<BsdfSample> {

@@ -123,7 +123,7 @@ impl Bdpt {
                         continue;
                     }
                 }
-                let weight = mis_weight(scene, light, camera, s, t, self.heuristic);
+                let weight = mis_weight(scene, light, camera, s, t, self.heuristic, c.ends);
                 if weight == 0.0 {
                     continue;
                 }

@@ -71,7 +71,7 @@ impl Mmlt {
                 return None;
             }
             let c = connect(scene, light, cam, s, t)?;
-            let wgt = mis_weight(scene, light, cam, s, t, self.heuristic);
+            let wgt = mis_weight(scene, light, cam, s, t, self.heuristic, c.ends);
             Some((c.raster, c.value * (wgt * n as f64)))
         });
         if let Some((raster, v)) = value

@@ -5,7 +5,7 @@
 //! function of the two subpaths.
 
 use super::vertex::{Vertex, VertexKind};
-use crate::bsdf::TransportMode;
+use crate::bsdf::{LocalPair, TransportMode};
 use crate::geometry::SurfaceEnd;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -17,6 +17,22 @@ pub struct Connection {
     pub value: Rgb,
     /// Raster position for `t = 1` (splatted); `None`: the camera sample's own pixel.
     pub raster: Option<[f64; 2]>,
+    /// The ends' directions in their BSDFs' frames, for the strategy's MIS weight
+    /// ([`crate::path::mis_weight`]).
+    pub ends: EndPairs,
+}
+
+/// The pairs of directions ([`Vertex::f_local`]: the walk's arrival direction, then the
+/// direction across the connection) at which a connection evaluated the BSDFs of its light end
+/// (`light`) and its camera end (`camera`); `None` where it evaluated none (an endpoint, or
+/// factors given by the caller), and the MIS weight brings the directions into the frames
+/// itself.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EndPairs {
+    /// At the light end.
+    pub light: Option<LocalPair>,
+    /// At the camera end.
+    pub camera: Option<LocalPair>,
 }
 
 /// Cosines below this make a connection tangent to a surface: its side (reflection or
@@ -105,8 +121,16 @@ pub fn connect_unoccluded(
         qs.map(end),
         end(pt),
         t.checked_sub(2).map(|i| &camera[i]),
-        || qs.map_or(Rgb::BLACK, |q| q.f(scene, pt, TransportMode::Importance)),
-        || qs.map_or(Rgb::BLACK, |q| pt.f(scene, q, TransportMode::Radiance)),
+        || {
+            qs.map_or((Rgb::BLACK, None), |q| {
+                q.f_local(scene, pt, TransportMode::Importance)
+            })
+        },
+        || {
+            qs.map_or((Rgb::BLACK, None), |q| {
+                pt.f_local(scene, q, TransportMode::Radiance)
+            })
+        },
     )
 }
 
@@ -126,15 +150,16 @@ pub struct End<'a> {
 /// The connection of a light prefix ending at `light` (`None`: `s = 0`) with a camera prefix
 /// ending at `camera`, whose previous vertex is `before_camera` (`None`: `t = 1`, the lens
 /// point). `f_light` gives the light end's factor toward the camera end (importance), `f_camera`
-/// the camera end's toward the light end (radiance), each as [`Vertex::f`]; they are called only
-/// for strategies that need them. No visibility test.
+/// the camera end's toward the light end (radiance), each as [`Vertex::f`], with the end's
+/// pair of directions in its BSDF's frame where it has one (kept in [`Connection::ends`]); they are
+/// called only for strategies that need them. No visibility test.
 pub fn join(
     scene: &Scene,
     light: Option<End<'_>>,
     camera: End<'_>,
     before_camera: Option<&Vertex>,
-    f_light: impl FnOnce() -> Rgb,
-    f_camera: impl FnOnce() -> Rgb,
+    f_light: impl FnOnce() -> (Rgb, Option<LocalPair>),
+    f_camera: impl FnOnce() -> (Rgb, Option<LocalPair>),
 ) -> Option<Connection> {
     let pt = camera.vertex;
     let Some(q) = light else {
@@ -146,14 +171,15 @@ pub fn join(
         return Some(Connection {
             value: le * camera.beta,
             raster: None,
+            ends: EndPairs::default(),
         });
     };
     let qs = q.vertex;
     if !qs.connectible() || !pt.connectible() {
         return None;
     }
-    let fq = if matches!(qs.kind, VertexKind::Light { .. }) {
-        qs.le(scene, pt)
+    let (fq, light_pair) = if matches!(qs.kind, VertexKind::Light { .. }) {
+        (qs.le(scene, pt), None)
     } else {
         f_light()
     };
@@ -171,13 +197,21 @@ pub fn join(
         return (!value.is_black()).then_some(Connection {
             value,
             raster: Some(raster),
+            ends: EndPairs {
+                light: light_pair,
+                camera: None,
+            },
         });
     }
-    let fp = f_camera();
+    let (fp, camera_pair) = f_camera();
     let value = q.beta * fq * fp * camera.beta * geometry(scene, qs, pt);
     (!value.is_black()).then_some(Connection {
         value,
         raster: None,
+        ends: EndPairs {
+            light: light_pair,
+            camera: camera_pair,
+        },
     })
 }
 

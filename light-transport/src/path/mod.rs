@@ -10,7 +10,8 @@ mod vertex;
 mod walk;
 
 pub use connect::{
-    Connection, End, GRAZING_COSINE, connect, connect_unoccluded, geometry, join, unoccluded,
+    Connection, End, EndPairs, GRAZING_COSINE, connect, connect_unoccluded, geometry, join,
+    unoccluded,
 };
 pub use mis::{MisHeuristic, mis_weight};
 pub use subpath::Subpath;

@@ -1,6 +1,6 @@
 //! Path vertices and the densities between them.
 
-use crate::bsdf::{Bsdf, TransportMode};
+use crate::bsdf::{Bsdf, LocalPair, TransportMode};
 use crate::geometry::SurfacePoint;
 use crate::light::LightKind;
 use crate::math::DVec3;
@@ -195,12 +195,33 @@ impl Vertex {
     /// BSDF value at this vertex for light arriving from `next` (or the adjoint), times the
     /// shading-normal factor ([`Vertex::shading_factor`]): the vertex's factor of the measurement
     /// contribution, whose geometry terms use geometric cosines.
+    #[inline]
     pub fn f(&self, scene: &Scene, next: &Vertex, mode: TransportMode) -> Rgb {
+        self.f_local(scene, next, mode).0
+    }
+
+    /// [`Vertex::f`] toward `next`, with the pair of directions it evaluated the BSDF at in the
+    /// BSDF's frame (`wo`, then the direction toward `next`; `None` where it evaluated none), from
+    /// which [`Vertex::pdf_pair`] takes a connection's densities without bringing the
+    /// directions into the frame again.
+    #[inline]
+    pub fn f_local(
+        &self,
+        scene: &Scene,
+        next: &Vertex,
+        mode: TransportMode,
+    ) -> (Rgb, Option<LocalPair>) {
         let Some(b) = &self.bsdf else {
-            return Rgb::BLACK;
+            return (Rgb::BLACK, None);
         };
         let wi = (next.p() - self.p()).normalize_or_zero();
-        b.eval(self.wo, wi, mode) * self.shading_factor(scene, self.wo, wi, mode)
+        let Some(l) = b.local_pair(self.wo, wi) else {
+            return (Rgb::BLACK, None);
+        };
+        (
+            b.eval_local(l, mode) * self.shading_factor(scene, self.wo, wi, mode),
+            Some(l),
+        )
     }
 
     /// Area density at `next` of sampling `next` from this vertex, the walk having arrived from
@@ -222,18 +243,35 @@ impl Vertex {
         self.to_area(solid, next, scene)
     }
 
-    /// `(self.pdf(scene, Some(a), b), self.pdf(scene, Some(b), a))`, bit for bit, with the BSDF's
-    /// directions brought into its frame once for both (surface vertices; others take the two
-    /// calls).
-    pub fn pdf_pair(&self, scene: &Scene, a: &Vertex, b: &Vertex) -> (f64, f64) {
+    /// The area densities a connection through this vertex to `next` makes at its two
+    /// neighbours, `(toward next, toward prev)`, `prev` being its predecessor in its walk (Veach
+    /// 1997 §10.2: the reverse densities recomputed at a connection). A surface vertex takes them
+    /// between the direction its walk arrived from (its `wo`, not one recomputed from the two
+    /// positions) and the direction toward `next`, in its BSDF's frame: `local` where
+    /// [`Vertex::f_local`] gave it, brought into the frame here when `None`. Other vertices
+    /// take two [`Vertex::pdf`] calls.
+    pub fn pdf_pair(
+        &self,
+        scene: &Scene,
+        prev: &Vertex,
+        next: &Vertex,
+        local: Option<LocalPair>,
+    ) -> (f64, f64) {
         match (&self.kind, &self.bsdf) {
-            (VertexKind::Surface, Some(bsdf)) => {
-                let wa = (a.p() - self.p()).normalize_or_zero();
-                let wb = (b.p() - self.p()).normalize_or_zero();
-                let (to_b, to_a) = bsdf.pdf_pair(wa, wb);
-                (self.to_area(to_b, b, scene), self.to_area(to_a, a, scene))
+            (VertexKind::Surface, Some(b)) => {
+                let local = local
+                    .or_else(|| b.local_pair(self.wo, (next.p() - self.p()).normalize_or_zero()));
+                let (toward, back) =
+                    local.map_or((0.0, 0.0), |l| (b.pdf_local(l), b.pdf_local(l.reversed())));
+                (
+                    self.to_area(toward, next, scene),
+                    self.to_area(back, prev, scene),
+                )
             }
-            _ => (self.pdf(scene, Some(a), b), self.pdf(scene, Some(b), a)),
+            _ => (
+                self.pdf(scene, Some(prev), next),
+                self.pdf(scene, Some(next), prev),
+            ),
         }
     }
 

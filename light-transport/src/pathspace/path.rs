@@ -354,8 +354,8 @@ impl FullPath {
                         s.checked_sub(1).map(|i| end(&v[i], &light[i])),
                         end(&v[s], &camera[t - 1]),
                         (t >= 2).then(|| &v[s + 1]),
-                        || light[s - 1].f_next,
-                        || camera[t - 1].f_next,
+                        || (light[s - 1].f_next, None),
+                        || (camera[t - 1].f_next, None),
                     )
                 })
                 .flatten()
