@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
-# An opt-in profile-guided release build of `charted` (rustc's -Cprofile-generate/-Cprofile-use):
-# an instrumented build renders a training set (every method on the built-in scenes, small images),
-# and the release build is compiled again with those branch and call counts. The default build
-# (`cargo build --release`) is unchanged; this one runs on the same CPUs. Prints the path of the
-# optimized binary. Needs rustup's `llvm-tools` component, which it adds.
+# An opt-in profile-guided build of `charted` (rustc's -Cprofile-generate/-Cprofile-use) with
+# whole-program optimisation (the `fast` profile: fat LTO, one codegen unit): an instrumented build
+# renders a training set (every method on the built-in scenes, small images), and the program is
+# compiled again with those branch and call counts. The default build (`cargo build --release`)
+# is unchanged; this one runs on the same CPUs and renders the same images bit for bit. Prints
+# the path of the optimized binary. Needs rustup's `llvm-tools` component, which it adds.
 #
-#   scripts/build-pgo.sh            # builds in target/pgo
+#   scripts/build-pgo.sh            # builds in target/pgo (about 8 minutes on two cores)
 #   PGO_DIR=/tmp/pgo scripts/build-pgo.sh
+#   TARGET_CPU=x86-64-v3 scripts/build-pgo.sh   # also for CPUs with AVX2 and FMA only (Haswell,
+#                                               # Zen and later); not for older CPUs
 #
 # Measured side by side against the default build in docs/performance.md (*A profile-guided build*).
 set -euo pipefail
@@ -17,11 +20,13 @@ rustup component add llvm-tools >&2
 host=$(rustc -vV | sed -n 's/^host: //p')
 profdata="$(rustc --print sysroot)/lib/rustlib/$host/bin/llvm-profdata"
 [[ -x $profdata ]] || { echo "build-pgo: $profdata not found (rustup component llvm-tools)" >&2; exit 1; }
+cpu=()
+[[ -n ${TARGET_CPU:-} ]] && cpu=("-Ctarget-cpu=$TARGET_CPU")
 rm -rf "$dir/profiles" "$dir/merged.profdata"
 mkdir -p "$dir/profiles"
-RUSTFLAGS="-Cprofile-generate=$dir/profiles" \
-  cargo build --release --quiet --bin charted --target-dir "$dir/instrumented" >&2
-trained="$dir/instrumented/release/charted"
+RUSTFLAGS="-Cprofile-generate=$dir/profiles ${cpu[*]:-}" \
+  cargo build --profile fast --quiet --bin charted --target-dir "$dir/instrumented" >&2
+trained="$dir/instrumented/fast/charted"
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 # The training set: each method on each built-in scene, once with two threads. Small images and
@@ -34,6 +39,6 @@ for scene in cornell caustic door ring pool; do
   done
 done
 "$profdata" merge -o "$dir/merged.profdata" "$dir/profiles"
-RUSTFLAGS="-Cprofile-use=$dir/merged.profdata -Cllvm-args=-pgo-warn-missing-function=false" \
-  cargo build --release --quiet --bin charted --target-dir "$dir/optimized" >&2
-echo "$dir/optimized/release/charted"
+RUSTFLAGS="-Cprofile-use=$dir/merged.profdata -Cllvm-args=-pgo-warn-missing-function=false ${cpu[*]:-}" \
+  cargo build --profile fast --quiet --bin charted --target-dir "$dir/optimized" >&2
+echo "$dir/optimized/fast/charted"
