@@ -32,8 +32,9 @@ pub struct SurfacePoint {
     /// Unit shading normal: the interpolated vertex normal where the mesh has normals, else `n`;
     /// always on the side of `n`.
     pub ns: DVec3,
-    /// Texture coordinates.
-    pub uv: [f64; 2],
+    /// Texture coordinates, in f32 as the meshes store them (they only address textures; the
+    /// point is 128 bytes with them, which a move copies inline instead of calling `memcpy`).
+    pub uv: [f32; 2],
     /// Shading tangent for anisotropic BSDFs: the interpolated vertex tangent (pbrt `"S"`) where
     /// given, else the direction of `∂p/∂u`.
     pub tangent: DVec3,

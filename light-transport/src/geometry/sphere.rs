@@ -57,7 +57,7 @@ impl Sphere {
         let (p, n) = self.project(p);
         let phi = crate::math::phi(n);
         let cos_theta = n.z.clamp(-1.0, 1.0);
-        let uv = [phi / (2.0 * PI), cos_theta.acos() / PI];
+        let uv = [(phi / (2.0 * PI)) as f32, (cos_theta.acos() / PI) as f32];
         let dpdu = Self::dpdu(n * self.radius);
         let n = n * self.sign();
         SurfacePoint {

@@ -175,8 +175,8 @@ impl Triangle {
         let n = frame.n;
         let t = self.uv_f64();
         let uv = [
-            t[0][0] * b0 + t[1][0] * b1 + t[2][0] * b2,
-            t[0][1] * b0 + t[1][1] * b1 + t[2][1] * b2,
+            (t[0][0] * b0 + t[1][0] * b1 + t[2][0] * b2) as f32,
+            (t[0][1] * b0 + t[1][1] * b1 + t[2][1] * b2) as f32,
         ];
         let mut point = SurfacePoint {
             p,

@@ -368,7 +368,13 @@ impl Scene {
         let m = self.primitive_material[point.primitive as usize] as usize;
         match self.lobes.get(m) {
             Some(lobes) => b.rebuild_from(lobes, frame),
-            None => b.rebuild(&self.materials, &self.textures, m, point.uv, frame)?,
+            None => b.rebuild(
+                &self.materials,
+                &self.textures,
+                m,
+                point.uv.map(f64::from),
+                frame,
+            )?,
         }
         b.ng = point.n;
         Ok(())
@@ -619,9 +625,15 @@ mod tests {
             let p = &hit.point;
             let m = scene.primitive_material[p.primitive as usize] as usize;
             let frame = Frame::from_normal_tangent(p.ns, p.tangent);
-            let expected = Bsdf::from_material(&scene.materials, &scene.textures, m, p.uv, frame)
-                .unwrap()
-                .with_geometric_normal(p.n);
+            let expected = Bsdf::from_material(
+                &scene.materials,
+                &scene.textures,
+                m,
+                p.uv.map(f64::from),
+                frame,
+            )
+            .unwrap()
+            .with_geometric_normal(p.n);
             scene.bsdf_into(p, &mut slot);
             assert_eq!(slot.as_ref(), Some(&expected), "material {m} at {:?}", p.uv);
             assert_eq!(scene.bsdf(p).unwrap(), expected);
