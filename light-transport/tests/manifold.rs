@@ -243,7 +243,9 @@ fn traced_chain(
         Interaction::Reflect,
         [0.0; 2],
     );
-    trace_chain(scene, &start, dir, &[interaction]).expect("a traced chain")
+    trace_chain(scene, &start, dir, &[interaction])
+        .expect("a traced chain")
+        .into_vec()
 }
 
 fn surface_vertex(scene: &Scene, from: DVec3, to: DVec3) -> ChainVertex {

@@ -10,7 +10,7 @@
 use super::chain::ChainVertex;
 use super::constraint::jacobian_blocks;
 use super::tridiagonal::BlockTridiagonal;
-use super::{Mat2, Vec2};
+use super::{Mat2, PerVertex, Vec2};
 use crate::math::DVec3;
 
 /// The constraint Jacobian of a chain: `a` over its specular vertices, and the blocks of its
@@ -33,11 +33,7 @@ pub fn chain_jacobian(
     last_basis: (DVec3, DVec3),
 ) -> Option<ChainJacobian> {
     let m = chain.len().checked_sub(2).filter(|&m| m >= 1)?;
-    let mut a = BlockTridiagonal {
-        lower: Vec::with_capacity(m),
-        diagonal: Vec::with_capacity(m),
-        upper: Vec::with_capacity(m),
-    };
+    let mut a = BlockTridiagonal::default();
     let (mut first, mut last) = (Mat2::zeros(), Mat2::zeros());
     for i in 1..=m {
         let prev_basis = if i == 1 {
@@ -81,7 +77,7 @@ pub fn tangent_map(chain: &[ChainVertex]) -> Option<(Mat2, Mat2)> {
     )?;
     let m = j.a.len();
     // Columns 0–1: the last endpoint's column of −B; columns 2–3: the first endpoint's.
-    let mut rhs = vec![nalgebra::SMatrix::<f64, 2, 4>::zeros(); m];
+    let mut rhs: PerVertex<_> = smallvec::smallvec![nalgebra::SMatrix::<f64, 2, 4>::zeros(); m];
     rhs[m - 1]
         .fixed_view_mut::<2, 2>(0, 0)
         .copy_from(&(-j.last));

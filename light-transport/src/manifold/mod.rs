@@ -37,6 +37,18 @@ pub use walk::{
     walk_manifold, walk_reversibly,
 };
 
+/// Vertices of a chain kept inline, endpoints included: a manifold walk or a Jacobian of a chain of
+/// up to `CHAIN_INLINE − 2` specular vertices allocates nothing (a perturbation proposes many, and
+/// chains of one or two specular vertices are the rule).
+pub const CHAIN_INLINE: usize = 6;
+
+/// A chain's vertices (up to [`CHAIN_INLINE`] inline).
+pub type Chain = smallvec::SmallVec<[ChainVertex; CHAIN_INLINE]>;
+
+/// One entry per vertex of a chain (Jacobian blocks, right-hand sides, steps), inline as
+/// [`Chain`] is.
+pub type PerVertex<T> = smallvec::SmallVec<[T; CHAIN_INLINE]>;
+
 /// 2×2 blocks of the constraint Jacobian.
 pub type Mat2 = nalgebra::Matrix2<f64>;
 /// 2-vectors: a vertex's displacement in its tangent frame, or a constraint value.

@@ -6,7 +6,7 @@
 //! block in a non-singular matrix; then the system is solved again densely with full pivoting
 //! (nalgebra), so that only a singular matrix fails.
 
-use super::{Mat2, Vec2};
+use super::{Mat2, PerVertex, Vec2};
 use nalgebra::DMatrix;
 
 /// `A` with `diagonal[i]` at block `(i, i)`, `lower[i]` at `(i, i−1)` (`lower[0]` unused) and
@@ -14,11 +14,11 @@ use nalgebra::DMatrix;
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct BlockTridiagonal {
     /// Sub-diagonal blocks.
-    pub lower: Vec<Mat2>,
+    pub lower: PerVertex<Mat2>,
     /// Diagonal blocks.
-    pub diagonal: Vec<Mat2>,
+    pub diagonal: PerVertex<Mat2>,
     /// Super-diagonal blocks.
-    pub upper: Vec<Mat2>,
+    pub upper: PerVertex<Mat2>,
 }
 
 /// Relative size below which a pivot block counts as singular.
@@ -40,12 +40,12 @@ impl BlockTridiagonal {
     pub fn solve<const K: usize>(
         &self,
         rhs: &[nalgebra::SMatrix<f64, 2, K>],
-    ) -> Option<Vec<nalgebra::SMatrix<f64, 2, K>>> {
+    ) -> Option<PerVertex<nalgebra::SMatrix<f64, 2, K>>> {
         self.solve_blocks(rhs).or_else(|| self.solve_dense(rhs))
     }
 
     /// Solve for one right-hand side vector per block row.
-    pub fn solve_vec(&self, rhs: &[Vec2]) -> Option<Vec<Vec2>> {
+    pub fn solve_vec(&self, rhs: &[Vec2]) -> Option<PerVertex<Vec2>> {
         self.solve::<1>(rhs)
     }
 
@@ -61,7 +61,7 @@ impl BlockTridiagonal {
     fn solve_blocks<const K: usize>(
         &self,
         rhs: &[nalgebra::SMatrix<f64, 2, K>],
-    ) -> Option<Vec<nalgebra::SMatrix<f64, 2, K>>> {
+    ) -> Option<PerVertex<nalgebra::SMatrix<f64, 2, K>>> {
         let n = self.len();
         if n == 0 || rhs.len() != n {
             return None;
@@ -73,8 +73,8 @@ impl BlockTridiagonal {
                 .then(|| Mat2::new(m[(1, 1)], -m[(0, 1)], -m[(1, 0)], m[(0, 0)]) / det)
         };
         // Forward elimination: D'_i = D_i − L_i D'_{i−1}⁻¹ U_{i−1}, R'_i likewise.
-        let mut inv = Vec::with_capacity(n);
-        let mut r = rhs.to_vec();
+        let mut inv = PerVertex::<Mat2>::new();
+        let mut r = PerVertex::from_slice(rhs);
         let mut d = self.diagonal[0];
         for i in 0..n {
             if i > 0 {
@@ -100,7 +100,7 @@ impl BlockTridiagonal {
     fn solve_dense<const K: usize>(
         &self,
         rhs: &[nalgebra::SMatrix<f64, 2, K>],
-    ) -> Option<Vec<nalgebra::SMatrix<f64, 2, K>>> {
+    ) -> Option<PerVertex<nalgebra::SMatrix<f64, 2, K>>> {
         let n = self.len();
         if n == 0 || rhs.len() != n {
             return None;
@@ -119,7 +119,7 @@ impl BlockTridiagonal {
             return None;
         }
         let x = lu.solve(&b)?;
-        let out: Vec<_> = (0..n)
+        let out: PerVertex<_> = (0..n)
             .map(|i| x.fixed_view::<2, K>(2 * i, 0).into_owned())
             .collect();
         out.iter()
@@ -189,19 +189,19 @@ mod tests {
         // [[0 I], [I 0]] has a singular first block but is a permutation.
         let z = Mat2::zeros();
         let a = BlockTridiagonal {
-            lower: vec![z, Mat2::identity()],
-            diagonal: vec![z, z],
-            upper: vec![Mat2::identity(), z],
+            lower: smallvec::smallvec![z, Mat2::identity()],
+            diagonal: smallvec::smallvec![z, z],
+            upper: smallvec::smallvec![Mat2::identity(), z],
         };
         let x = a
             .solve_vec(&[Vec2::new(1.0, 2.0), Vec2::new(3.0, 4.0)])
             .unwrap();
-        assert_eq!(x, vec![Vec2::new(3.0, 4.0), Vec2::new(1.0, 2.0)]);
+        assert_eq!(x[..], [Vec2::new(3.0, 4.0), Vec2::new(1.0, 2.0)]);
         // A truly singular matrix fails.
         let s = BlockTridiagonal {
-            lower: vec![z],
-            diagonal: vec![Mat2::new(1.0, 2.0, 2.0, 4.0)],
-            upper: vec![z],
+            lower: smallvec::smallvec![z],
+            diagonal: smallvec::smallvec![Mat2::new(1.0, 2.0, 2.0, 4.0)],
+            upper: smallvec::smallvec![z],
         };
         assert!(s.solve_vec(&[Vec2::new(1.0, 0.0)]).is_none());
     }

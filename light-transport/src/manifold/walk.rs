@@ -12,9 +12,9 @@
 //! `n_plane = γ(γ(n + n') − d ⟨γ(n + n'), d⟩)` with `d` the unit direction from the endpoint to the
 //! target, so that walks in the two directions use the same plane.
 
-use super::Vec2;
 use super::chain::{ChainVertex, Interaction, scatter};
 use super::geometry_term::{chain_jacobian, coordinates};
+use super::{Chain, PerVertex, Vec2};
 use crate::geometry::{Ray, SurfaceEnd};
 use crate::math::{DVec3, Frame};
 use crate::scene::Scene;
@@ -85,11 +85,12 @@ impl WalkFailure {
 #[derive(Clone, Debug)]
 pub struct Walked {
     /// The new chain `x_0, x'_1 … x'_m, x'`.
-    pub chain: Vec<ChainVertex>,
+    pub chain: Chain,
     /// Iterations used.
     pub iterations: usize,
-    /// Distance of the endpoint to the target before each iteration (the last below `ε L`).
-    pub distances: Vec<f64>,
+    /// Distance of the endpoint to the target before each iteration (the last below `ε L`;
+    /// inline up to 16 entries, which covers the default limit of iterations).
+    pub distances: smallvec::SmallVec<[f64; 16]>,
 }
 
 /// Per-walk statistics (the columns of the paper's Table 1 that concern walks).
@@ -197,7 +198,7 @@ fn follow(
     start: &ChainVertex,
     dir: DVec3,
     expected: impl Iterator<Item = Expected>,
-    out: &mut Vec<ChainVertex>,
+    out: &mut Chain,
 ) -> Result<Ray, WalkFailure> {
     let mut ray = if start.material == NO_MATERIAL {
         Ray::new(start.p(), dir)
@@ -237,13 +238,13 @@ fn propagate(
     through: DVec3,
     x_plane: DVec3,
     n_plane: DVec3,
-) -> Result<(Vec<ChainVertex>, DVec3), WalkFailure> {
+) -> Result<(Chain, DVec3), WalkFailure> {
     let m = chain.len() - 2;
     let dir = (through - chain[0].p()).normalize_or_zero();
     if dir == DVec3::ZERO {
         return Err(WalkFailure::ChangedConfiguration);
     }
-    let mut out = Vec::with_capacity(m);
+    let mut out = Chain::new();
     let expected = chain[1..=m]
         .iter()
         .map(|v| (Some(v.material), v.interaction, v.offset));
@@ -264,8 +265,8 @@ pub fn trace_chain(
     start: &ChainVertex,
     dir: DVec3,
     interactions: &[Interaction],
-) -> Result<Vec<ChainVertex>, WalkFailure> {
-    let mut out = vec![*start];
+) -> Result<Chain, WalkFailure> {
+    let mut out: Chain = smallvec::smallvec![*start];
     let expected = interactions.iter().map(|&i| (None, i, [0.0; 2]));
     let ray = follow(scene, start, dir, expected, &mut out)?;
     let hit = scene
@@ -331,10 +332,10 @@ pub fn walk_manifold(
     let n_plane = endpoint_plane(end.p(), end.point.n, target.p(), target.point.n);
     let plane_frame = Frame::from_normal(n_plane);
     let plane_basis = (plane_frame.s, plane_frame.t);
-    let mut cur: Vec<ChainVertex> = chain.to_vec();
+    let mut cur = Chain::from_slice(chain);
     let mut end_p = end.p();
     let mut beta = 1.0f64;
-    let mut distances = Vec::new();
+    let mut distances = smallvec::SmallVec::new();
     let mut cause = WalkFailure::NoSolution;
     let mut iterations = 0;
     loop {
@@ -350,7 +351,7 @@ pub fn walk_manifold(
         let j = chain_jacobian(&cur, cur[0].tangent_basis(), plane_basis)
             .ok_or(WalkFailure::Singular)?;
         let delta = coordinates(target.p() - end_p, plane_basis);
-        let mut rhs = vec![Vec2::zeros(); m];
+        let mut rhs: PerVertex<Vec2> = smallvec::smallvec![Vec2::zeros(); m];
         rhs[m - 1] = -(j.last * delta);
         let step = j.a.solve_vec(&rhs).ok_or(WalkFailure::Singular)?;
         let (e1, e2) = cur[1].tangent_basis();

@@ -68,9 +68,9 @@ use super::walk::trace_between;
 use crate::bsdf::TransportMode;
 use crate::light::LightKind;
 use crate::manifold::{
-    ChainVertex, Interaction, ManifoldSettings, NO_MATERIAL, SpecularProbability, VonMisesFisher,
-    WalkStats, chain_jacobian, constraint, generalized_geometry, generalized_geometry_reverse,
-    ordinary_geometry, scatter, walk_manifold, walk_reversibly,
+    Chain, ChainVertex, Interaction, ManifoldSettings, NO_MATERIAL, PerVertex, SpecularProbability,
+    VonMisesFisher, WalkStats, chain_jacobian, constraint, generalized_geometry,
+    generalized_geometry_reverse, ordinary_geometry, scatter, walk_manifold, walk_reversibly,
 };
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
@@ -672,7 +672,7 @@ impl<'a> ManifoldPerturbation<'a> {
         if second.is_empty() {
             return Ok(());
         }
-        let chain: Option<Vec<ChainVertex>> = std::iter::once((c, false))
+        let chain: Option<Chain> = std::iter::once((c, false))
             .chain(second.iter().map(|&i| (i, true)))
             .chain(std::iter::once((b, false)))
             .map(|(i, specular)| chain_vertex(scene, path, i, specular))
@@ -922,7 +922,7 @@ pub fn glossy_determinant(scene: &Scene, path: &super::FullPath, s: &Strategy) -
     }
     let chain = (lo..=hi)
         .map(|i| chain_vertex(scene, path, i, i != lo && i != hi && i != s.b))
-        .collect::<Option<Vec<_>>>()?;
+        .collect::<Option<Chain>>()?;
     let n = chain.len();
     let m = n - 2;
     let j = chain_jacobian(
@@ -949,7 +949,7 @@ pub fn glossy_determinant(scene: &Scene, path: &super::FullPath, s: &Strategy) -
         }
     }
     let inverse = a.try_inverse()?;
-    let keep: Vec<usize> = (0..m).filter(|&r| !path.specular(lo + 1 + r)).collect();
+    let keep: PerVertex<usize> = (0..m).filter(|&r| !path.specular(lo + 1 + r)).collect();
     let size = 2 * keep.len();
     let sub = nalgebra::DMatrix::from_fn(size, size, |r, c| {
         inverse[(2 * keep[r / 2] + r % 2, 2 * keep[c / 2] + c % 2)]
@@ -962,7 +962,7 @@ pub fn glossy_determinant(scene: &Scene, path: &super::FullPath, s: &Strategy) -
 /// from `lo` to `hi`, each seen from its camera end (the convention of radiance-mode deltas,
 /// module docs).
 fn segments_geometry(scene: &Scene, path: &super::FullPath, lo: usize, hi: usize) -> f64 {
-    let free: Vec<usize> = (lo..=hi)
+    let free: smallvec::SmallVec<[usize; 16]> = (lo..=hi)
         .filter(|&i| i == lo || i == hi || !path.specular(i))
         .collect();
     free.windows(2)
@@ -991,7 +991,7 @@ fn chain_geometry(
     }
     let Some(chain) = (lo..=hi)
         .map(|i| chain_vertex(scene, path, i, i != lo && i != hi))
-        .collect::<Option<Vec<_>>>()
+        .collect::<Option<Chain>>()
     else {
         return 0.0;
     };
