@@ -310,7 +310,14 @@ pub struct Lobes {
     len: usize,
     group_prob: [f64; MAX_LOBES],
     groups: usize,
+    /// The entry of a scene's table of prebuilt lobes ([`super::PrebuiltLobes`]) these lobes are
+    /// an unmodified copy of, or [`NO_ORIGIN`]: a copy into lobes that already hold the same
+    /// entry's copy is skipped. Every method that changes the lobes resets it.
+    origin: u64,
 }
+
+/// [`Lobes`] built in place, not copied from a table of prebuilt lobes.
+pub const NO_ORIGIN: u64 = u64::MAX;
 
 impl Clone for Lobes {
     fn clone(&self) -> Self {
@@ -319,13 +326,22 @@ impl Clone for Lobes {
             len: self.len,
             group_prob: self.group_prob,
             groups: self.groups,
+            origin: self.origin,
         }
     }
 
     /// Only the lobes in use, into the storage this list has where they fit: a hit on a material
     /// whose lobes were built once ([`super::PrebuiltLobes`]) copies them into its vertex's BSDF
     /// (a derived `clone_from` would copy every slot, and allocate again for spilled lists).
+    ///
+    /// Lobes that hold an unmodified copy of the same table entry as `source` are left as they are:
+    /// a hit on the material of the vertex slot's previous hit, or a candidate path copied from a
+    /// current path it was copied from before, copies nothing.
     fn clone_from(&mut self, source: &Self) {
+        if source.origin != NO_ORIGIN && self.origin == source.origin {
+            return;
+        }
+        self.origin = source.origin;
         let lobes = source.as_slice();
         match &mut self.items {
             Storage::Inline(a) if lobes.len() <= INLINE_LOBES => {
@@ -355,6 +371,7 @@ impl Default for Lobes {
             len: 0,
             group_prob: [0.0; MAX_LOBES],
             groups: 0,
+            origin: NO_ORIGIN,
         }
     }
 }
@@ -363,6 +380,12 @@ impl Default for Lobes {
 pub type Probabilities = [f64; MAX_LOBES];
 
 impl Lobes {
+    /// Mark these lobes as entry `origin` of a table of prebuilt lobes (unique among all tables
+    /// and entries, never [`NO_ORIGIN`]); any change to them clears the mark.
+    pub(crate) fn set_origin(&mut self, origin: u64) {
+        self.origin = origin;
+    }
+
     /// The lobes.
     pub fn as_slice(&self) -> &[Lobe] {
         match &self.items {
@@ -373,6 +396,7 @@ impl Lobes {
 
     /// Remove every lobe and group (keeping the storage).
     pub fn clear(&mut self) {
+        self.origin = NO_ORIGIN;
         self.len = 0;
         self.groups = 0;
         self.group_prob = [0.0; MAX_LOBES];
@@ -380,6 +404,7 @@ impl Lobes {
 
     /// Open a new group of probability `prob`; `None` when full.
     pub fn new_group(&mut self, prob: f64) -> Option<usize> {
+        self.origin = NO_ORIGIN;
         if self.groups == MAX_LOBES {
             return None;
         }
@@ -390,6 +415,7 @@ impl Lobes {
 
     /// Add a lobe; `None` when the list is full.
     pub fn push(&mut self, lobe: Lobe) -> Option<()> {
+        self.origin = NO_ORIGIN;
         if self.len == MAX_LOBES {
             return None;
         }
@@ -410,6 +436,7 @@ impl Lobes {
 
     /// Renormalise group probabilities over the groups that hold lobes.
     pub fn finish(&mut self) {
+        self.origin = NO_ORIGIN;
         let mut used = [false; MAX_LOBES];
         for l in self.as_slice() {
             used[l.group] = true;

@@ -10,6 +10,7 @@
 use super::lobes::Lobes;
 use super::material;
 use crate::scene::{MaterialDesc, TextureDesc};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Per material, its lobes when they are the same at every surface point.
 #[derive(Clone, Debug, Default)]
@@ -21,6 +22,10 @@ impl PrebuiltLobes {
     /// The lobes of every material of `materials` that has no image texture in its tree and is
     /// valid.
     pub fn new(materials: &[MaterialDesc], textures: &[TextureDesc]) -> Self {
+        // Each table's entries carry their own marks, so that lobes copied from one scene's table
+        // are never taken for another's.
+        static NEXT_TABLE: AtomicU64 = AtomicU64::new(0);
+        let table = NEXT_TABLE.fetch_add(1, Ordering::Relaxed);
         let per_material = (0..materials.len())
             .map(|m| {
                 if material::varies_over_surface(materials, m) {
@@ -28,6 +33,7 @@ impl PrebuiltLobes {
                 }
                 let mut lobes = Lobes::default();
                 material::build(&mut lobes, materials, textures, m, [0.0, 0.0]).ok()?;
+                lobes.set_origin((table << 32) | m as u64);
                 Some(lobes)
             })
             .collect();
@@ -175,5 +181,38 @@ pub(crate) mod tests {
                 assert_eq!(dst.as_slice().as_ptr(), storage, "spilled storage kept");
             }
         }
+    }
+
+    /// A copy skipped because the list already holds the same table entry's copy leaves it equal
+    /// to that entry; a list changed since, or holding an entry of another table (another
+    /// scene's) under the same material number, is copied again. Fails when a change to the
+    /// list does not clear its mark (`clear` below, `material::build`), or when tables share
+    /// marks.
+    #[test]
+    fn a_skipped_copy_is_the_entry_it_skipped() {
+        let (m, t) = (materials(), vec![checker(1.0)]);
+        let pre = PrebuiltLobes::new(&m, &t);
+        let (matte, metal) = (pre.get(1).unwrap(), pre.get(3).unwrap());
+        let mut dst = Lobes::default();
+        dst.clone_from(matte);
+        dst.clone_from(matte);
+        assert_eq!(dst, *matte);
+        // Changed in place: the next copy of the same entry must replace it.
+        material::build(&mut dst, &m, &t, 3, [0.0; 2]).unwrap();
+        assert_eq!(dst, *metal);
+        dst.clone_from(matte);
+        assert_eq!(dst, *matte, "a changed list was taken for the entry's copy");
+        dst.clear();
+        dst.clone_from(matte);
+        assert_eq!(dst, *matte, "a cleared list was taken for the entry's copy");
+        // Another scene's table, whose material 1 is the metal.
+        let other = PrebuiltLobes::new(&[m[0].clone(), m[3].clone()], &t);
+        dst.clone_from(other.get(1).unwrap());
+        assert_eq!(
+            dst, *metal,
+            "another table's entry was taken for this one's"
+        );
+        dst.clone_from(matte);
+        assert_eq!(dst, *matte);
     }
 }
