@@ -1047,7 +1047,7 @@ mod tests {
                         );
                         assert_eq!(
                             bvh.closest_hit_v3(o, d, f64::INFINITY, NO_PRIMITIVE)
-                                .map(|h| h.t),
+                                .map(|((t, _, _), _)| t),
                             Some(brute.t)
                         );
                     }
