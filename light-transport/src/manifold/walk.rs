@@ -231,29 +231,32 @@ fn follow(
 }
 
 /// Trace from `chain[0]` through the point `through`, repeating the chain's interactions at each
-/// hit, and end on the plane `(x_plane, n_plane)`: the new specular vertices and the end point.
+/// hit, and end on the plane `(x_plane, n_plane)`: the new specular vertices, into `out` (emptied
+/// first; a walk keeps one list for all its steps instead of moving a new one out of each), and
+/// the end point.
 fn propagate(
     scene: &Scene,
     chain: &[ChainVertex],
     through: DVec3,
     x_plane: DVec3,
     n_plane: DVec3,
-) -> Result<(Chain, DVec3), WalkFailure> {
+    out: &mut Chain,
+) -> Result<DVec3, WalkFailure> {
     let m = chain.len() - 2;
     let dir = (through - chain[0].p()).normalize_or_zero();
     if dir == DVec3::ZERO {
         return Err(WalkFailure::ChangedConfiguration);
     }
-    let mut out = Chain::new();
+    out.clear();
     let expected = chain[1..=m]
         .iter()
         .map(|v| (Some(v.material), v.interaction, v.offset));
-    let ray = follow(scene, &chain[0], dir, expected, &mut out)?;
+    let ray = follow(scene, &chain[0], dir, expected, out)?;
     let t = (x_plane - ray.o).dot(n_plane) / ray.d.dot(n_plane);
     if !(t > 0.0 && t.is_finite()) {
         return Err(WalkFailure::ChangedConfiguration);
     }
-    Ok((out, ray.at(t)))
+    Ok(ray.at(t))
 }
 
 /// A chain traced from `start` along `dir` through specular vertices that scatter as
@@ -338,6 +341,7 @@ pub fn walk_manifold(
     let mut distances = smallvec::SmallVec::new();
     let mut cause = WalkFailure::NoSolution;
     let mut iterations = 0;
+    let mut traced = Chain::new();
     loop {
         let dist = (end_p - target.p()).length();
         distances.push(dist);
@@ -356,9 +360,9 @@ pub fn walk_manifold(
         let step = j.a.solve_vec(&rhs).ok_or(WalkFailure::Singular)?;
         let (e1, e2) = cur[1].tangent_basis();
         let through = cur[1].p() + (e1 * step[0][0] + e2 * step[0][1]) * beta;
-        match propagate(scene, &cur, through, end.p(), n_plane) {
-            Ok((vertices, new_end)) if (new_end - target.p()).length() < dist => {
-                cur[1..=m].copy_from_slice(&vertices);
+        match propagate(scene, &cur, through, end.p(), n_plane, &mut traced) {
+            Ok(new_end) if (new_end - target.p()).length() < dist => {
+                cur[1..=m].copy_from_slice(&traced);
                 end_p = new_end;
                 cur[n - 1].point.p = new_end;
                 beta = (2.0 * beta).min(1.0);
