@@ -84,6 +84,14 @@ impl Primitive {
         }
     }
 
+    /// The texture coordinates of `point`, a point on this primitive.
+    fn texture_coordinates(&self, point: &SurfacePoint) -> [f64; 2] {
+        match self {
+            Primitive::Triangle(tri) => tri.texture_coordinates(point.local[0], point.local[1]),
+            Primitive::Sphere(_) => Sphere::texture_coordinates(point.local),
+        }
+    }
+
     /// The flat surface point where the ray first hits this primitive, without the BVH (the
     /// tests' brute force).
     #[cfg(test)]
@@ -628,6 +636,15 @@ impl Bvh {
             })
     }
 
+    /// The texture coordinates of a point on one of the BVH's primitives (a hit's or a light
+    /// sample's); `(0, 0)` for points that lie on none. Computed on demand: only materials with
+    /// image textures read them.
+    pub fn texture_coordinates(&self, point: &SurfacePoint) -> [f64; 2] {
+        self.primitives
+            .get(point.primitive as usize)
+            .map_or([0.0; 2], |p| p.texture_coordinates(point))
+    }
+
     /// Whether anything blocks the open segment `o + t d`, `t ∈ (0, t_max)`.
     ///
     /// The primitives that blocked this thread's latest segments are tested first, before any
@@ -1134,6 +1151,60 @@ mod tests {
         let d = bvh.derivatives(&level);
         assert_eq!(d, tri.derivatives(0.25, 0.5, Some(&tilted)));
         assert!(d.dndu.x.abs() > 0.1, "{:?}", d.dndu);
+    }
+
+    /// The texture coordinates the BVH computes on demand for a hit are its triangle's vertex
+    /// coordinates interpolated in f64 at the hit's own barycentrics (the ray's, from the
+    /// triangle's intersection alone), and a sphere's `(φ/2π, θ/π)` at its normal, bit for bit: a
+    /// point that carried them rounded (to f32, as it once did) changes every textured image in
+    /// its last bits, and fails here. A point on no primitive gets `(0, 0)`.
+    #[test]
+    fn texture_coordinates_on_demand_are_exact() {
+        let mut rng = stream(12, 0);
+        let mut r = || uniform(&mut rng);
+        let tri = Triangle {
+            p: [DVec3::ZERO, DVec3::X, DVec3::Y],
+            uv: [[0.1, 0.7], [2.3, 0.5], [0.3, 1.9]],
+            flip: false,
+            shading: NO_SHADING,
+        };
+        let ball = Sphere {
+            center: DVec3::new(0.3, 0.3, -3.0),
+            radius: 0.5,
+            flip: false,
+        };
+        let bvh = Bvh::new(vec![Primitive::Triangle(tri), Primitive::Sphere(ball)]);
+        for _ in 0..200 {
+            let (x, y) = (0.45 * r(), 0.45 * r());
+            let (o, d) = (DVec3::new(x, y, 1.0), -DVec3::Z);
+            let hit = bvh.closest_hit(o, d, f64::INFINITY).expect("the triangle");
+            let (_, b1, b2) = tri.intersect(o, d, f64::INFINITY).expect("the triangle");
+            let b0 = 1.0 - b1 - b2;
+            let uv = tri.uv.map(|[u, v]| [f64::from(u), f64::from(v)]);
+            let exact = [0, 1].map(|c| uv[0][c] * b0 + uv[1][c] * b1 + uv[2][c] * b2);
+            let got = bvh.texture_coordinates(&hit.point);
+            assert_eq!(
+                got.map(f64::to_bits),
+                exact.map(f64::to_bits),
+                "at {x}, {y}"
+            );
+
+            let o = DVec3::new(0.3 + 0.8 * (x - 0.2), 0.3 - 0.8 * (y - 0.2), -1.0);
+            let below = bvh.closest_hit(o, d, f64::INFINITY).expect("the sphere");
+            let n = below.point.n;
+            let exact = [
+                crate::math::phi(n) / (2.0 * std::f64::consts::PI),
+                n.z.clamp(-1.0, 1.0).acos() / std::f64::consts::PI,
+            ];
+            let got = bvh.texture_coordinates(&below.point);
+            assert_eq!(
+                got.map(f64::to_bits),
+                exact.map(f64::to_bits),
+                "at {x}, {y}"
+            );
+        }
+        let lens = SurfacePoint::flat(DVec3::ZERO, DVec3::Z, u32::MAX);
+        assert_eq!(bvh.texture_coordinates(&lens), [0.0; 2]);
     }
 
     /// A hit's surface point, with its triangle's frame from the per-thread cache, is the one its

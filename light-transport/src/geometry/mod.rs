@@ -19,9 +19,11 @@ pub const NO_PRIMITIVE: u32 = u32::MAX;
 ///
 /// The surface is parameterised by `(u, v)` (a triangle's texture coordinates when it has them,
 /// else the default `(0,0), (1,0), (1,1)` at its vertices, as pbrt; a sphere's `(φ/2π, θ/π)`).
-/// The derivatives of that parameterisation ([`Derivatives`]) are not carried: only manifold walks
-/// read them, and they cost a hit more than the rest of its point (divisions, and trigonometry on
-/// spheres). `Bvh::derivatives` computes them from the point's primitive and `local` coordinates.
+/// Neither the texture coordinates nor the derivatives of that parameterisation
+/// ([`Derivatives`]) are carried: only textured materials read the first and only manifold walks
+/// the second, while every hit's point is built and moved (at 120 bytes a move is an inline copy;
+/// above 128 it is a call to `memcpy`). `Bvh::texture_coordinates` and `Bvh::derivatives`
+/// compute them from the point's primitive and `local` coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
     /// Position.
@@ -32,14 +34,12 @@ pub struct SurfacePoint {
     /// Unit shading normal: the interpolated vertex normal where the mesh has normals, else `n`;
     /// always on the side of `n`.
     pub ns: DVec3,
-    /// Texture coordinates, in f32 as the meshes store them (they only address textures; the
-    /// point is 128 bytes with them, which a move copies inline instead of calling `memcpy`).
-    pub uv: [f32; 2],
     /// Shading tangent for anisotropic BSDFs: the interpolated vertex tangent (pbrt `"S"`) where
     /// given, else the direction of `∂p/∂u`.
     pub tangent: DVec3,
-    /// The point's coordinates on its primitive, from which its [`Derivatives`] are computed: a
-    /// triangle's barycentrics `(b1, b2)`, a sphere's `(φ, 0)` (zero off the scene's surfaces).
+    /// The point's coordinates on its primitive, from which its [`Derivatives`] and its texture
+    /// coordinates are computed (`Bvh::derivatives`, `Bvh::texture_coordinates`): a triangle's
+    /// barycentrics `(b1, b2)`, a sphere's `(φ, cos θ)` (zero off the scene's surfaces).
     pub local: [f64; 2],
     /// Index of the primitive in the scene.
     pub primitive: u32,
@@ -70,7 +70,6 @@ impl SurfacePoint {
             p,
             n,
             ns: n,
-            uv: [0.0; 2],
             tangent: crate::math::Frame::from_normal(n).s,
             local: [0.0; 2],
             primitive,
@@ -96,12 +95,12 @@ pub struct Hit {
 mod tests {
     use super::*;
 
-    /// A surface point takes 128 bytes, the largest copy baseline x86-64 code makes inline: at
-    /// 136 (texture coordinates in f64) every move of one (a walk's hit into its vertex, a hit
-    /// returned, a vertex copied) was a call to `memcpy` (docs/performance.md, *Small copies and
-    /// calls*).
+    /// A surface point takes 120 bytes, within the 128 that baseline x86-64 code copies inline:
+    /// at 136 (texture coordinates carried in f64) every move of one (a walk's hit into its
+    /// vertex, a hit returned, a vertex copied) was a call to `memcpy` (docs/performance.md,
+    /// *Small copies and calls*).
     #[test]
-    fn surface_points_are_128_bytes() {
-        assert_eq!(std::mem::size_of::<SurfacePoint>(), 128);
+    fn surface_points_are_120_bytes() {
+        assert_eq!(std::mem::size_of::<SurfacePoint>(), 120);
     }
 }

@@ -50,25 +50,31 @@ impl Sphere {
         }
     }
 
+    /// The texture coordinates `(φ/2π, θ/π)` of a point whose `local` coordinates are
+    /// `(φ, cos θ)` ([`Sphere::point`]).
+    #[inline]
+    pub fn texture_coordinates(local: [f64; 2]) -> [f64; 2] {
+        [local[0] / (2.0 * PI), local[1].acos() / PI]
+    }
+
     /// The surface point at world position `p` (projected onto the sphere), parameterised by
-    /// `u = φ/2π`, `v = θ/π` (`θ` from `+z`); its tangent is along `∂p/∂u = 2π (−y, x, 0)`
-    /// (relative to the centre). Its derivatives: [`Sphere::derivatives`].
+    /// `u = φ/2π`, `v = θ/π` (`θ` from `+z`; [`Sphere::texture_coordinates`]); its tangent is
+    /// along `∂p/∂u = 2π (−y, x, 0)` (relative to the centre). Its derivatives:
+    /// [`Sphere::derivatives`].
     pub fn point(&self, p: DVec3, primitive: u32) -> SurfacePoint {
         let (p, n) = self.project(p);
         let phi = crate::math::phi(n);
         let cos_theta = n.z.clamp(-1.0, 1.0);
-        let uv = [(phi / (2.0 * PI)) as f32, (cos_theta.acos() / PI) as f32];
         let dpdu = Self::dpdu(n * self.radius);
         let n = n * self.sign();
         SurfacePoint {
             p,
             n,
             ns: n,
-            uv,
             tangent: dpdu
                 .try_normalize()
                 .unwrap_or_else(|| crate::math::Frame::from_normal(n).s),
-            local: [phi, 0.0],
+            local: [phi, cos_theta],
             primitive,
         }
     }

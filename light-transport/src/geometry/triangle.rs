@@ -173,16 +173,10 @@ impl Triangle {
         let b0 = 1.0 - b1 - b2;
         let p = self.at(b1, b2);
         let n = frame.n;
-        let t = self.uv_f64();
-        let uv = [
-            (t[0][0] * b0 + t[1][0] * b1 + t[2][0] * b2) as f32,
-            (t[0][1] * b0 + t[1][1] * b1 + t[2][1] * b2) as f32,
-        ];
         let mut point = SurfacePoint {
             p,
             n,
             ns: n,
-            uv,
             tangent: frame.tangent,
             local: [b1, b2],
             primitive,
@@ -250,6 +244,18 @@ impl Triangle {
     #[inline]
     fn uv_f64(&self) -> [[f64; 2]; 3] {
         self.uv.map(|[u, v]| [f64::from(u), f64::from(v)])
+    }
+
+    /// The texture coordinates of the point with barycentrics `(b1, b2)`: its vertices'
+    /// interpolated in f64.
+    #[inline]
+    pub fn texture_coordinates(&self, b1: f64, b2: f64) -> [f64; 2] {
+        let b0 = 1.0 - b1 - b2;
+        let t = self.uv_f64();
+        [
+            t[0][0] * b0 + t[1][0] * b1 + t[2][0] * b2,
+            t[0][1] * b0 + t[1][1] * b1 + t[2][1] * b2,
+        ]
     }
 
     /// Uniform area sampling: barycentrics from two numbers (the square-root warp

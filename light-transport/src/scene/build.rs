@@ -372,7 +372,7 @@ impl Scene {
                 &self.materials,
                 &self.textures,
                 m,
-                point.uv.map(f64::from),
+                self.bvh.texture_coordinates(point),
                 frame,
             )?,
         }
@@ -629,13 +629,18 @@ mod tests {
                 &scene.materials,
                 &scene.textures,
                 m,
-                p.uv.map(f64::from),
+                scene.bvh.texture_coordinates(p),
                 frame,
             )
             .unwrap()
             .with_geometric_normal(p.n);
             scene.bsdf_into(p, &mut slot);
-            assert_eq!(slot.as_ref(), Some(&expected), "material {m} at {:?}", p.uv);
+            assert_eq!(
+                slot.as_ref(),
+                Some(&expected),
+                "material {m} at {:?}",
+                scene.bvh.texture_coordinates(p)
+            );
             assert_eq!(scene.bsdf(p).unwrap(), expected);
             seen[m] += 1;
         }
