@@ -33,6 +33,10 @@ impl PrebuiltLobes {
                 }
                 let mut lobes = Lobes::default();
                 material::build(&mut lobes, materials, textures, m, [0.0, 0.0]).ok()?;
+                // Table and material each fit in 32 bits (materials are numbered in u32 by the
+                // scene's primitives; four billion scenes in one process are not built), so
+                // marks never collide, nor equal `NO_ORIGIN`'s all-ones.
+                debug_assert!(table < u64::from(u32::MAX) && m < u32::MAX as usize);
                 lobes.set_origin((table << 32) | m as u64);
                 Some(lobes)
             })
