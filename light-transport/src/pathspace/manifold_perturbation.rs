@@ -672,12 +672,13 @@ impl<'a> ManifoldPerturbation<'a> {
         if second.is_empty() {
             return Ok(());
         }
-        let chain: Option<Chain> = std::iter::once((c, false))
+        let mut chain = Chain::new();
+        let vertices = std::iter::once((c, false))
             .chain(second.iter().map(|&i| (i, true)))
-            .chain(std::iter::once((b, false)))
-            .map(|(i, specular)| chain_vertex(scene, path, i, specular))
-            .collect();
-        let chain = chain.ok_or(Failure::Failed)?;
+            .chain(std::iter::once((b, false)));
+        if !push_chain(scene, path, vertices, &mut chain) {
+            return Err(Failure::Failed);
+        }
         let material = if target.primitive == u32::MAX {
             NO_MATERIAL
         } else {
@@ -910,6 +911,25 @@ fn chain_vertex(
     Some(cv)
 }
 
+/// Push the chain vertices of `path` at `vertices` (each index with whether it is to be specular,
+/// [`chain_vertex`]) onto `chain`, in order; `false` when one has none. One move per vertex into
+/// the caller's list: collecting them through `Option` moved each (264 bytes) twice and the list
+/// once more.
+fn push_chain(
+    scene: &Scene,
+    path: &super::FullPath,
+    vertices: impl IntoIterator<Item = (usize, bool)>,
+    chain: &mut Chain,
+) -> bool {
+    for (i, specular) in vertices {
+        let Some(v) = chain_vertex(scene, path, i, specular) else {
+            return false;
+        };
+        chain.push(v);
+    }
+    true
+}
+
 /// eq. 12's change of variables at `path` for strategy `s`: `|det ∂[x_b, x_g…]/∂[x_b, o_g…]|`
 /// over the glossy vertices `x_g` of its chains (1 when there are none). The constraint
 /// Jacobian over the vertices strictly between the ends, `x_b`'s rows replaced by the identity
@@ -920,9 +940,11 @@ pub fn glossy_determinant(scene: &Scene, path: &super::FullPath, s: &Strategy) -
     if (lo + 1..hi).all(|i| i == s.b || path.specular(i)) {
         return Some(1.0);
     }
-    let chain = (lo..=hi)
-        .map(|i| chain_vertex(scene, path, i, i != lo && i != hi && i != s.b))
-        .collect::<Option<Chain>>()?;
+    let mut chain = Chain::new();
+    let vertices = (lo..=hi).map(|i| (i, i != lo && i != hi && i != s.b));
+    if !push_chain(scene, path, vertices, &mut chain) {
+        return None;
+    }
     let n = chain.len();
     let m = n - 2;
     let j = chain_jacobian(
@@ -989,12 +1011,15 @@ fn chain_geometry(
         let cos = endpoint_cos(scene, &v[side], w);
         return ordinary_geometry(v[side].p(), cos, v[far].p(), v[far].point.n).unwrap_or(0.0);
     }
-    let Some(chain) = (lo..=hi)
-        .map(|i| chain_vertex(scene, path, i, i != lo && i != hi))
-        .collect::<Option<Chain>>()
-    else {
+    let mut chain = Chain::new();
+    if !push_chain(
+        scene,
+        path,
+        (lo..=hi).map(|i| (i, i != lo && i != hi)),
+        &mut chain,
+    ) {
         return 0.0;
-    };
+    }
     if side == hi {
         let w = direction(&v[hi], &v[hi - 1]);
         generalized_geometry_reverse(&chain, endpoint_cos(scene, &v[hi], w))
