@@ -1075,6 +1075,27 @@ mod tests {
         assert_eq!(tested, 100);
     }
 
+    /// The triangle `(0, X, Y)` with texture coordinates `uv` and shading entry `shading`, which
+    /// rays along `−z` from `z = 1` hit (the on-demand tests below).
+    fn corner_triangle(uv: [[f32; 2]; 3], shading: u32) -> Triangle {
+        Triangle {
+            p: [DVec3::ZERO, DVec3::X, DVec3::Y],
+            uv,
+            flip: false,
+            shading,
+        }
+    }
+
+    /// A ball of radius 0.5 under [`corner_triangle`] (centre `(0.3, 0.3, −3)`), which rays along
+    /// `−z` from `z = −1` hit.
+    fn ball_below(flip: bool) -> Sphere {
+        Sphere {
+            center: DVec3::new(0.3, 0.3, -3.0),
+            radius: 0.5,
+            flip,
+        }
+    }
+
     /// The derivatives the BVH computes on demand for a hit are its primitive's at the hit's
     /// barycentrics (a triangle's with its vertex normals from the shading table, a sphere's at
     /// its normal); a point sampled on the same triangle gets the same; a point on no primitive
@@ -1084,12 +1105,7 @@ mod tests {
     fn derivatives_on_demand_are_the_primitives() {
         let mut rng = stream(10, 0);
         let mut r = || uniform(&mut rng);
-        let tri = Triangle {
-            p: [DVec3::ZERO, DVec3::X, DVec3::Y],
-            uv: [[0.0, 0.0], [2.0, 0.5], [0.3, 1.5]],
-            flip: false,
-            shading: 0,
-        };
+        let tri = corner_triangle([[0.0, 0.0], [2.0, 0.5], [0.3, 1.5]], 0);
         let normals = TriangleShading {
             n: [
                 DVec3::new(0.3, 0.1, 1.0).normalize(),
@@ -1098,11 +1114,7 @@ mod tests {
             ],
             s: None,
         };
-        let ball = Sphere {
-            center: DVec3::new(0.3, 0.3, -3.0),
-            radius: 0.5,
-            flip: true,
-        };
+        let ball = ball_below(true);
         let bvh = Bvh::with_shading(
             vec![Primitive::Triangle(tri), Primitive::Sphere(ball)],
             vec![normals],
@@ -1162,17 +1174,8 @@ mod tests {
     fn texture_coordinates_on_demand_are_exact() {
         let mut rng = stream(12, 0);
         let mut r = || uniform(&mut rng);
-        let tri = Triangle {
-            p: [DVec3::ZERO, DVec3::X, DVec3::Y],
-            uv: [[0.1, 0.7], [2.3, 0.5], [0.3, 1.9]],
-            flip: false,
-            shading: NO_SHADING,
-        };
-        let ball = Sphere {
-            center: DVec3::new(0.3, 0.3, -3.0),
-            radius: 0.5,
-            flip: false,
-        };
+        let tri = corner_triangle([[0.1, 0.7], [2.3, 0.5], [0.3, 1.9]], NO_SHADING);
+        let ball = ball_below(false);
         let bvh = Bvh::new(vec![Primitive::Triangle(tri), Primitive::Sphere(ball)]);
         for _ in 0..200 {
             let (x, y) = (0.45 * r(), 0.45 * r());
