@@ -480,10 +480,22 @@ fn in_cells(v: &[f64], cells: &(Vec<usize>, Option<Vec<usize>>)) -> Vec<f64> {
     out
 }
 
+/// Runs per chart image of [`per_technique_p`]. Welch's test compares the runs' means, so it
+/// needs run images whose cell values are close to normal. Since the bootstrap walks once for
+/// every path length (`Method::shares_bootstrap_keys`), chains of one chart at different lengths
+/// can start from the same camera walk, so a run's chains cluster more and its cell values are
+/// more skewed: with 8 runs, `replica_exchange_chains_sample_their_own_technique` gave p = 7.7e-5
+/// on `door` (`s = 1`, seed 211), and 4e-3 to 1e-3 for seeds 411 and 511, while 32 runs of seeds
+/// 211 and 411 gave p = 1.0 and 0.11 there (no difference between the chains and plain Monte
+/// Carlo), and 16 runs of the three seeds 0.05–0.69. The old bootstrap's chains read 0.03–0.71
+/// with 8 runs.
+const PER_TECHNIQUE_RUNS: u64 = 16;
+
 /// The smallest p-value over techniques `s = 0 ..= TECHNIQUE_EDGES` of chains of chart `s`
 /// (recorded alone) against plain Monte Carlo of technique `s` (`references[s]`), cell by cell
-/// ([`cells`]). Every chart's image comes from the same 8 runs of `settings` (the chains do not
-/// depend on what is recorded). A chart whose expected chains fill no cell is not compared.
+/// ([`cells`]). Every chart's image comes from the same [`PER_TECHNIQUE_RUNS`] runs of `settings`
+/// (the chains do not depend on what is recorded). A chart whose expected chains fill no cell is
+/// not compared.
 fn per_technique_p<M: Method<State = CmltState>>(
     scene: &Scene,
     m: &M,
@@ -491,7 +503,7 @@ fn per_technique_p<M: Method<State = CmltState>>(
     references: &[TechniqueReference],
     settings: &MetropolisSettings,
 ) -> f64 {
-    let runs: Vec<Vec<Vec<f64>>> = (0..8)
+    let runs: Vec<Vec<Vec<f64>>> = (0..PER_TECHNIQUE_RUNS)
         .map(|r| {
             let mut sink = PerChart {
                 films: (0..=TECHNIQUE_EDGES).map(|_| Film::new(W, H)).collect(),

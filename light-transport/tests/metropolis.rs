@@ -1062,6 +1062,72 @@ fn bootstrap_weights_in_reused_storage_equal_fresh_samples() {
     );
 }
 
+/// A bootstrap that walks once for every path length (`Method::independent_all`, for the methods
+/// whose bootstrap shares its keys across lengths) gives each length bit for bit the weight and
+/// stratum of the sample that length draws alone from the same key (`independent_in_stratum`,
+/// and `independent`, which the seeding replays), for MMLT, path-space MLT and charted MLT, with
+/// and without the short paths left to a direct pass, on every built-in scene. The tests of the test, run
+/// by hand: the light subpath walked one vertex short (`max_edges − 1`), and MMLT's technique
+/// number read from the camera substream, each fail here.
+#[test]
+fn a_bootstrap_walked_once_for_every_length_is_each_length_alone() {
+    use light_transport::metropolis::DirectApart;
+    fn check<M: Method>(method: &M, scene: &Scene, what: &str) -> usize {
+        assert!(method.shares_bootstrap_keys(), "{what}");
+        let mut all = vec![(0, 0.0); method.groups()];
+        let mut nonzero = 0;
+        for i in 0..400u64 {
+            let seed = 0xA11 ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            method.independent_all(scene, seed, &mut all);
+            for (g, &(stratum, weight)) in all.iter().enumerate() {
+                let alone = method.independent_in_stratum(scene, g, seed);
+                assert_eq!(stratum, alone.0, "{what}: group {g}, sample {i}");
+                assert_eq!(
+                    weight.to_bits(),
+                    alone.1.to_bits(),
+                    "{what}: group {g}, sample {i}"
+                );
+                let replayed = method.independent(scene, g, seed).1;
+                assert_eq!(
+                    weight.to_bits(),
+                    replayed.to_bits(),
+                    "{what}: group {g}, sample {i}"
+                );
+                nonzero += (weight > 0.0) as usize;
+            }
+        }
+        nonzero
+    }
+    let mlt = PathMlt::new(Mutations::new(MAX_EDGES)).unwrap();
+    let mlt_apart = PathMlt::new(Mutations::new(MAX_EDGES))
+        .unwrap()
+        .without_direct();
+    let mut total = [0; 6];
+    for name in builtin::BUILTIN {
+        let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((W, H))).unwrap();
+        let cmlt = Cmlt::new(&scene, Default::default()).unwrap();
+        let cmlt_apart = Cmlt::new(&scene, Default::default())
+            .unwrap()
+            .without_direct();
+        let n = [
+            check(&mmlt(), &scene, "mmlt"),
+            check(&mmlt().without_direct(), &scene, "mmlt, direct apart"),
+            check(&mlt, &scene, "path-space mlt"),
+            check(&mlt_apart, &scene, "path-space mlt, direct apart"),
+            check(&cmlt, &scene, "charted mlt"),
+            check(&cmlt_apart, &scene, "charted mlt, direct apart"),
+        ];
+        println!("{name}: nonzero weights {n:?}");
+        for (t, k) in total.iter_mut().zip(n) {
+            *t += k;
+        }
+    }
+    assert!(
+        total.iter().all(|&k| k > 300),
+        "too few samples carry light to compare: {total:?}"
+    );
+}
+
 /// A sink that keeps, per absorbed chunk, how many deposits it held and their weights in order;
 /// its chunks count every deposit they receive in `RECORDED` too.
 #[derive(Default)]

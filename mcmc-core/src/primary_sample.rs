@@ -148,12 +148,19 @@ impl PrimarySample {
                 reason: "coordinates must lie in [0, 1)".into(),
             });
         }
-        let mut s = Self::new(values.len(), step, seed)?;
+        step.validate()?;
+        Ok(Self::with_validated_values(values, step, seed))
+    }
+
+    /// [`PrimarySample::from_values`] for a step validated already and coordinates known to lie
+    /// in `[0, 1)` (drawn by a uniform generator), which are not checked again.
+    pub fn with_validated_values(values: Vec<Vec<f64>>, step: SmallStep, seed: u64) -> Self {
+        let mut s = Self::with_validated_step(values.len(), step, seed);
         for (st, v) in s.streams.iter_mut().zip(values) {
             st.modified = vec![0; v.len()];
             st.values = v;
         }
-        Ok(s)
+        s
     }
 
     /// Number of streams.

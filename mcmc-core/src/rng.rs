@@ -37,10 +37,39 @@ pub fn substream(master_seed: u64, purpose: u64, index: u64) -> ChainRng {
 /// The key of a purpose's generators: the purpose mixed into the master seed by SplitMix64's
 /// finaliser (streams stay selected by index).
 fn purpose_key(master_seed: u64, purpose: u64) -> u64 {
-    let mut z = master_seed ^ purpose.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    mix64(master_seed ^ purpose.wrapping_mul(GOLDEN_GAMMA))
+}
+
+/// SplitMix64's increment: 2^64 divided by the golden ratio, odd.
+const GOLDEN_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// SplitMix64's output function (Steele, Lea and Flood 2014; the variant of Stafford's
+/// `Mix13`): a bijection of 64-bit words in which every input bit affects every output bit. The
+/// one mixer of this workspace's keys.
+#[inline]
+pub fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
+}
+
+/// Number `counter` of the uniform sequence keyed by `key`: the `counter`-th output (from 0) of
+/// SplitMix64 started at state `key`, as a 53-bit number in `[0, 1)` like [`uniform`]'s. A
+/// counter-based generator: any number is computed directly from its position, so readers that
+/// visit positions in different orders, or some positions only, agree on every number they share.
+///
+/// ```
+/// use mcmc_core::rng::{counter_uniform, uniform};
+/// use rand::SeedableRng;
+/// let mut sequential = rand_xoshiro::SplitMix64::seed_from_u64(99);
+/// for i in 0..16 {
+///     assert_eq!(counter_uniform(99, i), uniform(&mut sequential));
+/// }
+/// ```
+#[inline]
+pub fn counter_uniform(key: u64, counter: u64) -> f64 {
+    let z = mix64(key.wrapping_add(counter.wrapping_add(1).wrapping_mul(GOLDEN_GAMMA)));
+    (z >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }
 
 /// The sub-streams of one purpose of a master seed, for a caller that makes many of them:

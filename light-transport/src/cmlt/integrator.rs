@@ -32,6 +32,10 @@
 //! The recorded colour is the path's balance-heuristic value `f / Σ p` (importance `π_s(u)`), as
 //! for path-space MLT.
 //!
+//! The bootstrap's sample `i` of every length holds one key's numbers ([`KeyedStream`], in the
+//! chart its technique number picks), so the forward maps of all lengths walk the first vertices
+//! of one pair of subpaths, which are walked once ([`Method::independent_all`]).
+//!
 //! With direct lighting rendered apart ([`crate::metropolis::SeparateDirect`]) the lengths of at
 //! most two edges get no bootstrap weight, hence no chains ([`CmltSettings::min_edges`]).
 
@@ -41,9 +45,11 @@ use super::technique::{TechniqueChart, unit_integrand};
 use crate::metropolis::{
     BootstrapSample, DIRECT_EDGES, DirectApart, ImportanceKind, Method, Recordable,
 };
+use crate::pathspace::walk::sample_paths_every_length;
 use crate::pathspace::{
     MutationProbabilities, Mutations, NewPath, PathState, PerturbationSettings,
 };
+use crate::sampler::{KeyedStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
 use crate::{Error, Result};
 use mcmc_charts::moves::{
@@ -57,6 +63,14 @@ use mcmc_core::tempering::LevelProposal;
 use mcmc_core::{Chain, ChainRng, Family, Kernel, MetropolisHastings, Proposal, Target};
 use std::sync::atomic::Ordering;
 use std::sync::{Arc, RwLock};
+
+thread_local! {
+    /// The state the bootstrap samples of a thread are evaluated in (its vectors reused).
+    static STATE: std::cell::RefCell<CmltState> =
+        std::cell::RefCell::new(CmltState::in_chart(0, Vec::new()));
+    /// The path the bootstrap's walks of a thread make (its vertices reused).
+    static PATH: std::cell::RefCell<PathState> = std::cell::RefCell::new(PathState::default());
+}
 
 /// A CMLT chain state: technique chart, numbers and path.
 pub type CmltState = ChartState<PathState>;
@@ -355,23 +369,37 @@ impl Cmlt {
         TechniqueChart::new(scene, k, s, self.settings.importance)
     }
 
-    /// An independent sample of path length `g + 1` from generator seed `seed`, evaluated in
-    /// `state` (whatever it held before): a chart `s` uniform in `0 … k`, coordinates uniform in
-    /// it. Returns the bootstrap weight `(k + 1) π_s(u)` (the chart was chosen with probability
-    /// `1/(k + 1)`); the chart is the state's.
+    /// The chart of paths of `k` edges that an independent sample of key `seed` picks (uniform
+    /// in `0 … k`, by the technique substream's number), `None` for a length the chains leave
+    /// alone.
+    fn keyed_chart(&self, k: usize, seed: u64) -> Option<usize> {
+        let u = KeyedStream::new(seed).number(TECHNIQUE_STREAM, layout::TECHNIQUE);
+        (k >= self.settings.min_edges).then(|| uniform_index(u, k + 1))
+    }
+
+    /// An independent sample of path length `g + 1` from key `seed` ([`KeyedStream`]), evaluated
+    /// in `state` (whatever it held before): a chart `s` uniform in `0 … k`, coordinates uniform
+    /// in it. Returns the bootstrap weight `(k + 1) π_s(u)` (the chart was chosen with
+    /// probability `1/(k + 1)`); the chart is the state's.
     fn sample_independent(&self, scene: &Scene, g: usize, seed: u64, state: &mut CmltState) -> f64 {
         let k = g + 1;
-        if k < self.settings.min_edges {
+        let Some(s) = self.keyed_chart(k, seed) else {
             state.move_to(0, std::iter::empty());
             return 0.0;
-        }
-        let mut rng = mcmc_core::rng::fast_stream(seed, 0);
-        let s = uniform_index(uniform(&mut rng), k + 1);
+        };
         let atlas = self.atlas(scene, k);
         let target = Self::target(&atlas);
-        state.move_to(s, (0..atlas.dim(s)).map(|_| uniform(&mut rng)));
+        match atlas.chart(s) {
+            Some(chart) => state.move_to(s, chart.keyed_coordinates(seed)),
+            None => state.move_to(s, std::iter::empty()),
+        }
         state.x.change = None;
         state.x.suitability = Default::default();
+        Self::weight(&target, k, s, state)
+    }
+
+    /// The bootstrap weight `(k + 1) π_s(u)` of a state of chart `s` of length `k`.
+    fn weight(target: &TechniqueTarget<'_>, k: usize, s: usize, state: &mut CmltState) -> f64 {
         let ln = target.ln_density(s, state);
         if ln.is_finite() {
             (k + 1) as f64 * ln.exp()
@@ -558,15 +586,49 @@ impl Method for Cmlt {
     }
 
     fn independent_in_stratum(&self, scene: &Scene, g: usize, seed: u64) -> (usize, f64) {
-        thread_local! {
-            // The state the bootstrap samples of a thread are evaluated in (its vectors reused).
-            static STATE: std::cell::RefCell<CmltState> =
-                std::cell::RefCell::new(CmltState::in_chart(0, Vec::new()));
-        }
         STATE.with_borrow_mut(|state| {
             let w = self.sample_independent(scene, g, seed, state);
             (state.chart, w)
         })
+    }
+
+    fn shares_bootstrap_keys(&self) -> bool {
+        true
+    }
+
+    /// Every length's sample of key `seed`, each in its chart, from one camera and one light
+    /// subpath walked to the longest length ([`sample_paths_every_length`]): a chart's forward
+    /// map of its keyed coordinates walks their first vertices
+    /// ([`TechniqueChart::keyed_coordinates`]), so the path each length's sample maps to is made
+    /// from them and evaluated as the forward map evaluates it.
+    fn independent_all(&self, scene: &Scene, seed: u64, out: &mut [(usize, f64)]) {
+        for (g, o) in out.iter_mut().enumerate() {
+            *o = (self.keyed_chart(g + 1, seed).unwrap_or(0), 0.0);
+        }
+        let mut keyed = KeyedStream::new(seed);
+        let max_edges = self.settings.max_edges.min(out.len());
+        let strategy = |k| self.keyed_chart(k, seed);
+        STATE.with_borrow_mut(|state| {
+            PATH.with_borrow_mut(|path| {
+                sample_paths_every_length(scene, max_edges, strategy, &mut keyed, path, |k, x| {
+                    let s = out[k - 1].0;
+                    let atlas = self.atlas(scene, k);
+                    let Some(chart) = atlas.chart(s) else {
+                        return;
+                    };
+                    state.move_to(s, chart.keyed_coordinates(seed));
+                    // The path in the state, its storage in the walks' (both reused).
+                    std::mem::swap(&mut state.x, x);
+                    state.x.change = None;
+                    state.x.suitability = Default::default();
+                    if chart.evaluate_path(&mut state.x) {
+                        let target = Self::target(&atlas);
+                        target.refresh_point(state);
+                        out[k - 1].1 = Self::weight(&target, k, s, state);
+                    }
+                })
+            })
+        });
     }
 
     /// The bootstrap picks a chart uniformly: its `k + 1` charts are the strata of length `k`.

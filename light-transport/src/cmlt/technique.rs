@@ -22,8 +22,8 @@ use crate::path::{Vertex, VertexKind};
 use crate::pathspace::PathState;
 use crate::pathspace::walk::sample_path;
 use crate::sampler::{
-    CAMERA_STREAM, LIGHT_STREAM, ReplayStream, SampleStream, SliceStream, VERTEX_BLOCK,
-    WritableStream, layout,
+    CAMERA_STREAM, KeyedStream, LIGHT_STREAM, ReplayStream, SampleStream, SliceStream,
+    VERTEX_BLOCK, WritableStream, layout,
 };
 use crate::scene::Scene;
 use mcmc_charts::Chart;
@@ -86,6 +86,24 @@ impl<'a> TechniqueChart<'a> {
     /// Camera vertices `t`.
     pub fn t(&self) -> usize {
         self.k + 1 - self.s
+    }
+
+    /// The coordinates holding the numbers of key `seed` ([`KeyedStream`]) where the forward map
+    /// reads them: the camera substream's first numbers, then the light substream's. The forward
+    /// map of these coordinates walks the first vertices of the subpaths a [`KeyedStream`] of
+    /// `seed` walks, so one pair of walks serves every chart and length
+    /// ([`crate::pathspace::walk::sample_paths_every_length`]).
+    pub fn keyed_coordinates(&self, seed: u64) -> impl Iterator<Item = f64> {
+        let (keyed, light_keyed) = (KeyedStream::new(seed), KeyedStream::new(seed));
+        let camera = (0..camera_numbers(self.t())).map(move |i| keyed.number(CAMERA_STREAM, i));
+        let light = (0..light_numbers(self.s)).map(move |i| light_keyed.number(LIGHT_STREAM, i));
+        camera.chain(light)
+    }
+
+    /// Whether the path the forward map made from this chart's subpaths is a point of the
+    /// chart, evaluating it: it carries light and this strategy could have made it.
+    pub fn evaluate_path(&self, x: &mut PathState) -> bool {
+        x.evaluate(self.scene, self.importance, 1.0) && x.strategy_importance(self.s) > 0.0
     }
 
     /// Write the numbers of the scattering vertex `v` (reached from `prev`, leaving toward
@@ -275,7 +293,7 @@ impl Chart<PathState> for TechniqueChart<'_> {
             x.fail_walk(self.k);
             return false;
         }
-        x.evaluate(self.scene, self.importance, 1.0) && x.strategy_importance(self.s) > 0.0
+        self.evaluate_path(x)
     }
 
     fn ln_density(&self, x: &PathState) -> f64 {

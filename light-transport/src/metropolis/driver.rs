@@ -4,6 +4,14 @@
 //! Determinism: bootstrap sample `i` of group `g` and chain `c` draw from their own streams of the
 //! master seed; chains are processed in fixed groups whose splats are applied to the film in group
 //! order after every round, so the image is identical for any thread count.
+//!
+//! A method whose groups are path lengths may share one key between the samples `i` of all its
+//! groups ([`Method::shares_bootstrap_keys`]: MMLT, path-space MLT, charted MLT): its sample of
+//! each length then reads the first vertices of one pair of subpaths walked to the longest
+//! length, so the bootstrap walks once per index instead of once per index and length. Within a
+//! group the samples stay independent and distributed as before, so each `b_g` and each group's
+//! seeding is as unbiased as before; across groups they are correlated, which adds to the
+//! variance of the sum `b` (measured in docs/performance.md).
 
 use super::record::{
     BootstrapSample, ExpectedValue, LargeStepMis, NormalisationTally, Recordable, Sink,
@@ -119,6 +127,24 @@ pub trait Method: Sync {
     /// when group `g` has more than one stratum. By default stratum 0.
     fn independent_in_stratum(&self, scene: &Scene, g: usize, seed: u64) -> (usize, f64) {
         (0, self.independent_weight(scene, g, seed))
+    }
+    /// Whether the bootstrap draws sample `i` of every group from one stream key, evaluating
+    /// them together with [`Method::independent_all`] (one pair of walks serving every path
+    /// length, [`crate::sampler::KeyedStream`]). Each group's samples stay independent of each
+    /// other and distributed as before; samples of different groups with the same index are
+    /// then correlated, which leaves every group's normalisation and seeding unbiased. `false`
+    /// by default: every `(group, index)` has a key of its own.
+    fn shares_bootstrap_keys(&self) -> bool {
+        false
+    }
+    /// The stratum and weight of [`Method::independent`]`(scene, g, seed)` for every group `g`
+    /// at once (`out[g]`, `out.len()` = [`Method::groups`]), bit for bit what
+    /// [`Method::independent_in_stratum`] gives group by group (the driver's replay check holds
+    /// a method to it). By default group by group.
+    fn independent_all(&self, scene: &Scene, seed: u64, out: &mut [(usize, f64)]) {
+        for (g, o) in out.iter_mut().enumerate() {
+            *o = self.independent_in_stratum(scene, g, seed);
+        }
     }
     /// Whether the chains move between groups (path-space MLT's change path length), so that
     /// the groups matter to the bootstrap only: the chains' deposits (all in group 0,
@@ -306,13 +332,11 @@ const EXCHANGE: u64 = 0xE8C4;
 
 fn key(seed: u64, g: usize, i: usize) -> u64 {
     // Distinct stream keys for every (group, index) of the bootstrap.
-    let mut z = seed
-        ^ (g as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)
-        ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        ^ BOOTSTRAP;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+    mcmc_core::rng::mix64(
+        seed ^ (g as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)
+            ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ BOOTSTRAP,
+    )
 }
 
 /// The normalisation of every group from the bootstrap and the chains' independent samples of
@@ -374,19 +398,38 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let t = Instant::now();
     let n = groups * settings.bootstrap;
     let strata: Vec<usize> = (0..groups).map(|g| method.strata(g).max(1)).collect();
-    let sample = |j: usize| {
-        let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
-        method.independent_in_stratum(scene, g, key(settings.seed, g, i))
-    };
-    // Each sample's stratum is kept only for a method with strata (a vector as long as the
-    // bootstrap's otherwise).
-    let (sample_strata, mut weights): (Vec<usize>, Vec<f64>) = if strata.iter().any(|&n| n > 1) {
-        (0..n).into_par_iter().map(sample).unzip()
+    let shared = method.shares_bootstrap_keys();
+    // The stream key of bootstrap sample `i` of group `g` (replayed by the seeding below).
+    let sample_key = |g: usize, i: usize| key(settings.seed, if shared { 0 } else { g }, i);
+    let (sample_strata, mut weights): (Vec<usize>, Vec<f64>) = if shared {
+        // Index by index, every group at once; then laid out group by group.
+        let mut all = vec![(0, 0.0); n];
+        all.par_chunks_mut(groups)
+            .enumerate()
+            .for_each(|(i, out)| method.independent_all(scene, sample_key(0, i), out));
+        (0..n)
+            .map(|j| all[(j % settings.bootstrap) * groups + j / settings.bootstrap])
+            .unzip()
     } else {
-        (
-            Vec::new(),
-            (0..n).into_par_iter().map(|j| sample(j).1).collect(),
-        )
+        let sample = |j: usize| {
+            let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
+            method.independent_in_stratum(scene, g, sample_key(g, i))
+        };
+        // Each sample's stratum is kept only for a method with strata (a vector as long as the
+        // bootstrap's otherwise).
+        if strata.iter().any(|&n| n > 1) {
+            (0..n).into_par_iter().map(sample).unzip()
+        } else {
+            (
+                Vec::new(),
+                (0..n).into_par_iter().map(|j| sample(j).1).collect(),
+            )
+        }
+    };
+    let sample_strata = if strata.iter().any(|&n| n > 1) {
+        sample_strata
+    } else {
+        Vec::new()
     };
     for wgt in &mut weights {
         if !wgt.is_finite() || *wgt < 0.0 {
@@ -426,7 +469,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
         .par_iter()
         .map(|&j| {
             let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
-            let (s, wgt) = method.independent(scene, g, key(settings.seed, g, i));
+            let (s, wgt) = method.independent(scene, g, sample_key(g, i));
             if (wgt - weights[j]).abs() > 1e-9 * weights[j].abs().max(1e-300) {
                 return Err(Error::InvalidScene(format!("replay of bootstrap path {i} (group {g}) gave importance {wgt}, the bootstrap saw {}: the sampler is not a deterministic function of its numbers", weights[j])));
             }

@@ -4,6 +4,10 @@
 //! contributes its MIS-weighted value divided by the probability of choosing the strategy. Paths of
 //! one edge use `(0, 2)` only (as in BDPT).
 //!
+//! The bootstrap's sample `i` of every length reads the numbers of one key, addressed by position
+//! ([`KeyedStream`]), so one camera and one light subpath walked to the longest length serve all
+//! lengths ([`technique_subpaths_every_length`]); a chain seeded from it holds those numbers.
+//!
 //! With [`Mmlt::direct_apart`] the chains leave the paths of at most two edges to a direct pass
 //! ([`super::SeparateDirect`]): their path lengths get no bootstrap weight, hence no chains.
 
@@ -11,10 +15,17 @@ use super::driver::Method;
 use super::importance::ImportanceKind;
 use super::pssmlt::{PrimaryState, mutate_primary};
 use super::stream::PrimaryStream;
-use crate::path::{MisHeuristic, Subpath, WalkSettings, connect, mis_weight, technique_subpaths};
-use crate::sampler::{CAMERA_STREAM, SampleStream, TECHNIQUE_STREAM, layout};
+use crate::path::{
+    MisHeuristic, Subpath, WalkSettings, connect, mis_weight, technique_subpaths,
+    technique_subpaths_every_length,
+};
+use crate::sampler::{
+    CAMERA_STREAM, KeyedStream, LIGHT_STREAM, SampleStream, TECHNIQUE_STREAM, layout,
+};
 use crate::scene::Scene;
+use crate::spectrum::Rgb;
 use mcmc_core::kernel::Observer;
+use mcmc_core::primary_sample::PrimarySample;
 use mcmc_core::primary_sample::{Kelemen, LARGE_STEP};
 use mcmc_core::{Chain, ChainRng, Proposal};
 use std::cell::RefCell;
@@ -54,25 +65,74 @@ impl Mmlt {
         if k == 1 { 1 } else { k + 1 }
     }
 
+    /// The strategy `(s, t)` of paths of `k` edges that technique number `u` picks, and the
+    /// number of strategies it picks among.
+    fn technique(k: usize, u: f64) -> (usize, usize, usize) {
+        let n = Self::strategies(k);
+        let s = mcmc_core::rng::uniform_index(u, n);
+        (s, k + 1 - s, n)
+    }
+
+    /// Strategy `(s, t)` of `n` on subpaths walked at least that far: its MIS-weighted value
+    /// over the probability of picking it, and its raster position (`None`: the camera
+    /// sample's own).
+    #[allow(clippy::too_many_arguments)]
+    fn strategy_value(
+        &self,
+        scene: &Scene,
+        light: &Subpath,
+        cam: &Subpath,
+        s: usize,
+        t: usize,
+        n: usize,
+    ) -> Option<(Option<[f64; 2]>, Rgb)> {
+        let c = connect(scene, light, cam, s, t)?;
+        let wgt = mis_weight(scene, light, cam, s, t, self.heuristic, c.ends);
+        Some((c.raster, c.value * (wgt * n as f64)))
+    }
+
+    /// A state of length `k` holding the numbers of key `seed` ([`KeyedStream`]) at every
+    /// position a path of at most [`WalkSettings::max_edges`] edges reads, unevaluated: the
+    /// bootstrap sample [`Method::independent_all`] evaluated for that length.
+    fn keyed_state(&self, seed: u64, k: usize) -> PrimaryState {
+        let keyed = KeyedStream::new(seed);
+        let numbers = vec![
+            keyed.numbers(
+                CAMERA_STREAM,
+                layout::camera_numbers(self.walk.max_camera_vertices()),
+            ),
+            keyed.numbers(
+                LIGHT_STREAM,
+                layout::light_numbers(self.walk.max_light_vertices()),
+            ),
+            keyed.numbers(TECHNIQUE_STREAM, layout::TECHNIQUE + 1),
+        ];
+        PrimaryState {
+            // Later coordinates from a generator keyed apart from the numbers above.
+            sample: PrimarySample::with_validated_values(
+                numbers,
+                self.kelemen.small_step,
+                mcmc_core::rng::mix64(seed),
+            ),
+            contribution: Default::default(),
+            length: k,
+        }
+    }
+
     /// Evaluate a state of length `k` (its group + 1).
     pub fn evaluate(&self, scene: &Scene, k: usize, state: &mut PrimaryState) {
         state.contribution.splats.clear();
         state.contribution.importance = 0.0;
-        let n = Self::strategies(k);
         let mut stream = PrimaryStream::new(&mut state.sample);
         stream.start_stream(TECHNIQUE_STREAM);
         stream.seek(layout::TECHNIQUE);
-        let u = stream.next_1d();
-        let s = mcmc_core::rng::uniform_index(u, n);
-        let t = k + 1 - s;
+        let (s, t, n) = Self::technique(k, stream.next_1d());
         let value = SUBPATHS.with(|b| {
             let (cam, light) = &mut *b.borrow_mut();
             if !technique_subpaths(scene, &mut stream, s, t, cam, light) {
                 return None;
             }
-            let c = connect(scene, light, cam, s, t)?;
-            let wgt = mis_weight(scene, light, cam, s, t, self.heuristic, c.ends);
-            Some((c.raster, c.value * (wgt * n as f64)))
+            self.strategy_value(scene, light, cam, s, t, n)
         });
         if let Some((raster, v)) = value
             && !v.is_black()
@@ -113,7 +173,7 @@ impl Method for Mmlt {
     }
 
     fn independent(&self, scene: &Scene, g: usize, seed: u64) -> (PrimaryState, f64) {
-        let mut s = PrimaryState::new(self.kelemen, seed, g + 1);
+        let mut s = self.keyed_state(seed, g + 1);
         if !self.samples_length(g + 1) {
             return (s, 0.0);
         }
@@ -122,13 +182,38 @@ impl Method for Mmlt {
         (s, w)
     }
 
-    fn independent_weight(&self, scene: &Scene, g: usize, seed: u64) -> f64 {
-        if !self.samples_length(g + 1) {
-            return 0.0;
-        }
-        super::pssmlt::bootstrap_weight(self.kelemen, seed, g + 1, |s| {
-            self.evaluate(scene, g + 1, s)
-        })
+    fn shares_bootstrap_keys(&self) -> bool {
+        true
+    }
+
+    /// Every path length's sample of key `seed` from one camera and one light subpath walked to
+    /// the longest length ([`technique_subpaths_every_length`]).
+    fn independent_all(&self, scene: &Scene, seed: u64, out: &mut [(usize, f64)]) {
+        out.fill((0, 0.0));
+        let mut stream = KeyedStream::new(seed);
+        stream.start_stream(TECHNIQUE_STREAM);
+        stream.seek(layout::TECHNIQUE);
+        let u = stream.next_1d();
+        SUBPATHS.with(|b| {
+            let (cam, light) = &mut *b.borrow_mut();
+            let strategy = |k| self.samples_length(k).then(|| Self::technique(k, u).0);
+            technique_subpaths_every_length(
+                scene,
+                &mut stream,
+                self.walk.max_edges,
+                strategy,
+                cam,
+                light,
+                |k, s, t, cam, light| {
+                    if let Some((_, v)) =
+                        self.strategy_value(scene, light, cam, s, t, Self::strategies(k))
+                        && !v.is_black()
+                    {
+                        out[k - 1].1 = self.importance.of(v);
+                    }
+                },
+            );
+        });
     }
 
     fn ln_density(&self, _scene: &Scene, state: &PrimaryState) -> f64 {

@@ -18,5 +18,5 @@ pub use subpath::Subpath;
 pub use vertex::{Vertex, VertexKind};
 pub use walk::{
     Roulette, WalkSettings, camera_ray, camera_subpath, camera_subpath_with, light_subpath,
-    light_subpath_with, technique_subpaths,
+    light_subpath_with, technique_subpaths, technique_subpaths_every_length,
 };

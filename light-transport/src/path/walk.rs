@@ -282,6 +282,43 @@ pub fn technique_subpaths<S: SampleStream>(
     light.len() >= s
 }
 
+/// [`technique_subpaths`] for every path length `k = 1 ..= max_edges` at once, strategy
+/// `strategy(k)` (`None`: skip that length), from a stream whose numbers depend on their position
+/// alone ([`crate::sampler::KeyedStream`]): the camera subpath is walked once to `max_edges + 1`
+/// vertices and the light subpath (only if some strategy needs it) to `max_edges`, and each
+/// length's strategy reads their first `t` and `s` vertices, which are the walks it would make
+/// alone, number for number. `each(k, s, t, camera, light)` is called, in order of `k`, for every
+/// length whose strategy can contribute, where [`technique_subpaths`] would return `true`.
+pub fn technique_subpaths_every_length<S: SampleStream>(
+    scene: &Scene,
+    stream: &mut S,
+    max_edges: usize,
+    strategy: impl Fn(usize) -> Option<usize>,
+    camera: &mut Subpath,
+    light: &mut Subpath,
+    mut each: impl FnMut(usize, usize, usize, &Subpath, &Subpath),
+) {
+    camera_subpath(scene, stream, max_edges + 1, None, camera);
+    light.clear();
+    let mut light_walked = false;
+    for k in 1..=max_edges {
+        let Some(s) = strategy(k) else {
+            continue;
+        };
+        let t = k + 1 - s;
+        if t == 0 || camera.len() < t || (s > 0 && !camera[t - 1].connectible()) {
+            continue;
+        }
+        if s > 0 && !light_walked {
+            light_subpath(scene, stream, max_edges, light);
+            light_walked = true;
+        }
+        if light.len() >= s {
+            each(k, s, t, camera, light);
+        }
+    }
+}
+
 /// Continue a subpath whose last vertex emitted `ray` with throughput `beta` and solid-angle
 /// density `pdf_dir`, until `max_vertices` vertices or the walk ends.
 #[allow(clippy::too_many_arguments)]

@@ -5,7 +5,9 @@
 //! the driver's per-group normalisations `b_k` are the image energy per path length, their sum
 //! `b` normalises the image, and resampling the whole population in proportion to the weights
 //! seeds the chains without start-up bias. Chains then move freely between lengths (bidirectional
-//! and new-path mutations); the new-path mutation picks lengths in proportion to `b_k`.
+//! and new-path mutations); the new-path mutation picks lengths in proportion to `b_k`. Sample `i`
+//! of every length reads one key's numbers ([`KeyedStream`]), so its subpaths are walked once for
+//! all lengths ([`NewPath::sample_every_length`]).
 //!
 //! With direct lighting rendered apart ([`crate::metropolis::SeparateDirect`]) the chains sample
 //! paths of more than two edges only ([`Mutations::min_edges`]): the shorter lengths get no
@@ -19,11 +21,16 @@ use super::state::PathState;
 use crate::Result;
 use crate::manifold::WalkStats;
 use crate::metropolis::{DIRECT_EDGES, DirectApart, Method};
-use crate::sampler::IndependentStream;
+use crate::sampler::KeyedStream;
 use crate::scene::Scene;
 use mcmc_core::kernel::Observer;
 use mcmc_core::{Chain, ChainRng};
 use std::sync::{Mutex, RwLock};
+
+thread_local! {
+    /// The state the bootstrap samples of a thread are evaluated in (its vectors reused).
+    static STATE: std::cell::RefCell<PathState> = std::cell::RefCell::new(PathState::default());
+}
 
 /// Path-space MLT.
 #[derive(Debug)]
@@ -110,7 +117,7 @@ impl PathMlt {
         if k < self.mutations.min_edges {
             return 0.0;
         }
-        let mut stream = IndependentStream::new(mcmc_core::rng::fast_stream(seed, 0));
+        let mut stream = KeyedStream::new(seed);
         NewPath::sample(scene, self.mutations.importance, k, &mut stream, state);
         (k + 1) as f64 * state.contribution.importance
     }
@@ -140,11 +147,31 @@ impl Method for PathMlt {
     }
 
     fn independent_weight(&self, scene: &Scene, g: usize, seed: u64) -> f64 {
-        thread_local! {
-            // The state the bootstrap samples of a thread are evaluated in (its vectors reused).
-            static STATE: std::cell::RefCell<PathState> = std::cell::RefCell::new(PathState::default());
-        }
         STATE.with_borrow_mut(|state| self.sample_independent(scene, g, seed, state))
+    }
+
+    fn shares_bootstrap_keys(&self) -> bool {
+        true
+    }
+
+    /// Every length's sample of key `seed` from one camera and one light subpath walked to the
+    /// longest length ([`NewPath::sample_every_length`]).
+    fn independent_all(&self, scene: &Scene, seed: u64, out: &mut [(usize, f64)]) {
+        out.fill((0, 0.0));
+        let edges = (
+            self.mutations.min_edges,
+            self.mutations.max_edges.min(out.len()),
+        );
+        STATE.with_borrow_mut(|state| {
+            NewPath::sample_every_length(
+                scene,
+                self.mutations.importance,
+                edges,
+                seed,
+                state,
+                |k, state| out[k - 1].1 = (k + 1) as f64 * state.contribution.importance,
+            )
+        });
     }
 
     fn ln_density(&self, _scene: &Scene, state: &PathState) -> f64 {

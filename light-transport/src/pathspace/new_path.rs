@@ -6,9 +6,9 @@
 
 use super::mutation::{Change, Mutation, Registration};
 use super::state::PathState;
-use super::walk::sample_path;
+use super::walk::{sample_path, sample_paths_every_length};
 use crate::metropolis::ImportanceKind;
-use crate::sampler::{IndependentStream, SampleStream, TECHNIQUE_STREAM, layout};
+use crate::sampler::{IndependentStream, KeyedStream, SampleStream, TECHNIQUE_STREAM, layout};
 use crate::scene::Scene;
 use mcmc_core::rng::{categorical, uniform, uniform_index};
 use mcmc_core::{ChainRng, Failure};
@@ -105,6 +105,30 @@ impl NewPath {
             return false;
         }
         out.evaluate(scene, importance, 1.0)
+    }
+
+    /// [`NewPath::sample`] of every length `k` from `min_edges` to `max_edges` on the numbers of
+    /// key `seed` ([`KeyedStream`]), the two subpaths walked once for all lengths
+    /// ([`sample_paths_every_length`]): `each(k, out)` for every length whose path was made,
+    /// evaluated in `out`, bit for bit `NewPath::sample(.., k, &mut KeyedStream::new(seed), ..)`.
+    /// The lengths not reported carry no light.
+    pub fn sample_every_length(
+        scene: &Scene,
+        importance: ImportanceKind,
+        (min_edges, max_edges): (usize, usize),
+        seed: u64,
+        out: &mut PathState,
+        mut each: impl FnMut(usize, &PathState),
+    ) {
+        let mut stream = KeyedStream::new(seed);
+        stream.start_stream(TECHNIQUE_STREAM);
+        stream.seek(layout::TECHNIQUE);
+        let u = stream.next_1d();
+        let strategy = |k: usize| (k >= min_edges).then(|| uniform_index(u, k + 1));
+        sample_paths_every_length(scene, max_edges, strategy, &mut stream, out, |k, state| {
+            state.evaluate(scene, importance, 1.0);
+            each(k, state);
+        });
     }
 
     /// `ln T̃(ȳ)`: `ln(P_len(k') / (k' + 1) · Σ_s 1/I(C*_s(ȳ)))`.

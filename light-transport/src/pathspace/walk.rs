@@ -11,7 +11,9 @@ use super::state::PathState;
 use crate::bsdf::TransportMode;
 use crate::geometry::{Ray, SurfacePoint};
 use crate::math::{DVec3, Frame, turn};
-use crate::path::{Subpath, Vertex, VertexKind, connect, technique_subpaths};
+use crate::path::{
+    Subpath, Vertex, VertexKind, connect, technique_subpaths, technique_subpaths_every_length,
+};
 use crate::sampler::SampleStream;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
@@ -299,11 +301,17 @@ pub fn with_vertex_buffers<R>(f: impl FnOnce(&mut Vec<Vertex>, &mut Vec<Vertex>)
     r
 }
 
+thread_local! {
+    /// The light and camera subpaths of [`sample_path`] and [`sample_paths_every_length`], per
+    /// thread (a path is sampled per bootstrap sample, new-path proposal and technique-chart
+    /// map, and a walk reserves a whole subpath of vertices).
+    static BUFFERS: std::cell::RefCell<(Subpath, Subpath)> =
+        const { std::cell::RefCell::new((Subpath::new(), Subpath::new())) };
+}
+
 /// Sample a whole path of `k` edges by strategy `s` (light vertices) from `stream`, as BDPT would
 /// (the connection is tested for visibility); `None` when the subpaths fall short or the
-/// connection carries nothing. The path is not evaluated. The two subpaths are walked in buffers
-/// kept per thread (a path is sampled per bootstrap sample, new-path proposal and technique-chart
-/// map, and a walk reserves a whole subpath of vertices).
+/// connection carries nothing. The path is not evaluated.
 pub fn sample_path<S: SampleStream>(
     scene: &Scene,
     k: usize,
@@ -311,10 +319,6 @@ pub fn sample_path<S: SampleStream>(
     stream: &mut S,
     out: &mut PathState,
 ) -> Option<()> {
-    thread_local! {
-        static BUFFERS: std::cell::RefCell<(Subpath, Subpath)> =
-            const { std::cell::RefCell::new((Subpath::new(), Subpath::new())) };
-    }
     BUFFERS.with_borrow_mut(|(light, cam)| {
         let t = k + 1 - s;
         if !technique_subpaths(scene, stream, s, t, cam, light) {
@@ -322,6 +326,41 @@ pub fn sample_path<S: SampleStream>(
         }
         connect(scene, light, cam, s, t)?;
         out.path.set_from_subpaths(scene, light, cam, s, t)
+    })
+}
+
+/// [`sample_path`] for every length `k = 1 ..= max_edges` at once, by strategy `strategy(k)`
+/// (`None`: skip that length), from a stream whose numbers depend on their position alone
+/// ([`crate::sampler::KeyedStream`]), the subpaths walked once for all lengths
+/// ([`technique_subpaths_every_length`]). `each(k, out)` is called, in order of `k`, for every
+/// length whose path [`sample_path`] would have made, with that path in `out`.
+pub fn sample_paths_every_length<S: SampleStream>(
+    scene: &Scene,
+    max_edges: usize,
+    strategy: impl Fn(usize) -> Option<usize>,
+    stream: &mut S,
+    out: &mut PathState,
+    mut each: impl FnMut(usize, &mut PathState),
+) {
+    BUFFERS.with_borrow_mut(|(light, cam)| {
+        technique_subpaths_every_length(
+            scene,
+            stream,
+            max_edges,
+            strategy,
+            cam,
+            light,
+            |k, s, t, cam, light| {
+                if connect(scene, light, cam, s, t).is_some()
+                    && out
+                        .path
+                        .set_from_subpaths(scene, light, cam, s, t)
+                        .is_some()
+                {
+                    each(k, out);
+                }
+            },
+        );
     })
 }
 

@@ -23,12 +23,15 @@
 //! Implementations: [`IndependentStream`] (fresh random numbers), [`ReplayStream`] (a given vector
 //! per substream — chart forward maps), [`Recorder`] (wraps a stream and keeps what was read), and
 //! [`SliceStream`] (a writable stream over given vectors, where inverses [`WritableStream::put`]
-//! the numbers of a path back in the layout); and for the pass-based estimators, [`PixelStream`]
+//! the numbers of a path back in the layout), [`KeyedStream`] (numbers addressed by position:
+//! one sample's walks serve every path length); and for the pass-based estimators, [`PixelStream`]
 //! (independent numbers or a per-pixel Owen-scrambled Sobol sequence, [`PixelSampler`]).
 
+mod keyed;
 mod pixel;
 mod sobol;
 
+pub use keyed::KeyedStream;
 pub use pixel::{PixelSampler, PixelStream, SOBOL_PASSES};
 
 use mcmc_core::ChainRng;

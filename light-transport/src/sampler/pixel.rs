@@ -136,10 +136,7 @@ fn set_of(stream: usize, p: usize) -> Option<(u32, usize)> {
 
 /// A 32-bit seed from a 64-bit key (SplitMix64's finaliser, folded).
 fn fold(key: u64) -> u32 {
-    let mut z = key;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
+    let z = mcmc_core::rng::mix64(key);
     (z ^ (z >> 32)) as u32
 }
 
