@@ -401,23 +401,56 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let shared = method.shares_bootstrap_keys();
     // The stream key of bootstrap sample `i` of group `g` (replayed by the seeding below).
     let sample_key = |g: usize, i: usize| key(settings.seed, if shared { 0 } else { g }, i);
+    let bootstrap = settings.bootstrap;
+    // Where sample `i` of group `g` sits in the bootstrap's vectors, and back: index by index
+    // when the groups share keys (every group's sample `i` is computed at once), else group by
+    // group.
+    let locate = |j: usize| {
+        if shared {
+            (j % groups, j / groups)
+        } else {
+            (j / bootstrap, j % bootstrap)
+        }
+    };
+    // Each sample's stratum is kept only for a method with strata (a vector as long as the
+    // bootstrap's otherwise).
+    let with_strata = strata.iter().any(|&n| n > 1);
     let (sample_strata, mut weights): (Vec<usize>, Vec<f64>) = if shared {
-        // Index by index, every group at once; then laid out group by group.
-        let mut all = vec![(0, 0.0); n];
-        all.par_chunks_mut(groups)
-            .enumerate()
-            .for_each(|(i, out)| method.independent_all(scene, sample_key(0, i), out));
-        (0..n)
-            .map(|j| all[(j % settings.bootstrap) * groups + j / settings.bootstrap])
-            .unzip()
+        let mut weights = vec![0.0; n];
+        let mut sample_strata = vec![0; if with_strata { n } else { 0 }];
+        let all = || vec![(0, 0.0); groups];
+        let sample = |i: usize, out: &mut Vec<(usize, f64)>| {
+            method.independent_all(scene, sample_key(0, i), out);
+        };
+        if with_strata {
+            weights
+                .par_chunks_mut(groups)
+                .zip(sample_strata.par_chunks_mut(groups))
+                .enumerate()
+                .for_each_init(all, |out, (i, (w, st))| {
+                    sample(i, out);
+                    for ((w, st), &(stratum, weight)) in w.iter_mut().zip(st).zip(out.iter()) {
+                        (*w, *st) = (weight, stratum);
+                    }
+                });
+        } else {
+            weights
+                .par_chunks_mut(groups)
+                .enumerate()
+                .for_each_init(all, |out, (i, w)| {
+                    sample(i, out);
+                    for (w, &(_, weight)) in w.iter_mut().zip(out.iter()) {
+                        *w = weight;
+                    }
+                });
+        }
+        (sample_strata, weights)
     } else {
         let sample = |j: usize| {
-            let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
+            let (g, i) = locate(j);
             method.independent_in_stratum(scene, g, sample_key(g, i))
         };
-        // Each sample's stratum is kept only for a method with strata (a vector as long as the
-        // bootstrap's otherwise).
-        if strata.iter().any(|&n| n > 1) {
+        if with_strata {
             (0..n).into_par_iter().map(sample).unzip()
         } else {
             (
@@ -426,11 +459,6 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
             )
         }
     };
-    let sample_strata = if strata.iter().any(|&n| n > 1) {
-        sample_strata
-    } else {
-        Vec::new()
-    };
     for wgt in &mut weights {
         if !wgt.is_finite() || *wgt < 0.0 {
             *wgt = 0.0;
@@ -438,14 +466,18 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
         }
     }
     stats.bootstrap_nonzero = weights.iter().filter(|&&v| v > 0.0).count();
-    stats.group_normalisation = (0..groups)
-        .map(|g| {
-            weights[g * settings.bootstrap..(g + 1) * settings.bootstrap]
-                .iter()
-                .sum::<f64>()
-                / settings.bootstrap as f64
-        })
-        .collect();
+    // Each group's sum in order of the index, whatever the layout (bit for bit the same sums).
+    let mut sums = vec![0.0; groups];
+    for i in 0..bootstrap {
+        for (g, sum) in sums.iter_mut().enumerate() {
+            *sum += weights[if shared {
+                i * groups + g
+            } else {
+                g * bootstrap + i
+            }];
+        }
+    }
+    stats.group_normalisation = sums.iter().map(|s| s / bootstrap as f64).collect();
     stats.normalisation = stats.group_normalisation.iter().sum();
     stats.bootstrap_time = t.elapsed();
     method.bootstrap_done(&stats.group_normalisation);
@@ -468,7 +500,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let seeded: Vec<Result<Chain<M::State>>> = picks
         .par_iter()
         .map(|&j| {
-            let (g, i) = (j / settings.bootstrap, j % settings.bootstrap);
+            let (g, i) = locate(j);
             let (s, wgt) = method.independent(scene, g, sample_key(g, i));
             if (wgt - weights[j]).abs() > 1e-9 * weights[j].abs().max(1e-300) {
                 return Err(Error::InvalidScene(format!("replay of bootstrap path {i} (group {g}) gave importance {wgt}, the bootstrap saw {}: the sampler is not a deterministic function of its numbers", weights[j])));
@@ -481,8 +513,8 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
     let mut chain_groups = Vec::with_capacity(picks.len());
     for (c, &j) in seeded.into_iter().zip(&picks) {
         chains.push(c?);
-        chain_groups.push(j / settings.bootstrap);
-        stats.group_chains[j / settings.bootstrap] += 1;
+        chain_groups.push(locate(j).0);
+        stats.group_chains[locate(j).0] += 1;
     }
     let mut rngs: Vec<ChainRng> = (0..chains.len())
         .map(|c| substream(settings.seed, CHAINS, c as u64))
@@ -525,7 +557,7 @@ pub fn run_with<M: Method, K: Sink<M::State>>(
         let mut t = NormalisationTally::new(kind, &strata);
         for (j, &weight) in weights.iter().enumerate() {
             t.add(BootstrapSample {
-                group: j / settings.bootstrap,
+                group: locate(j).0,
                 stratum: sample_strata.get(j).copied().unwrap_or(0),
                 weight,
             });
