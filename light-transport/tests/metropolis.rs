@@ -1004,6 +1004,21 @@ fn mismatched_importance_is_caught() {
     );
 }
 
+/// `count` on every built-in scene (at `W`×`H`), summed per entry: how many of the samples a
+/// check compared carry light, printed per scene.
+fn nonzero_over_builtins<const N: usize>(count: impl Fn(&Scene) -> [usize; N]) -> [usize; N] {
+    let mut total = [0; N];
+    for name in builtin::BUILTIN {
+        let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((W, H))).unwrap();
+        let n = count(&scene);
+        println!("{name}: nonzero weights {n:?}");
+        for (t, k) in total.iter_mut().zip(n) {
+            *t += k;
+        }
+    }
+    total
+}
+
 /// The bootstrap's weights, computed in per-thread storage that each sample reuses
 /// (`Method::independent_weight`), are bit for bit those of the independent samples the seeding
 /// replays (`Method::independent`), for PSSMLT (with and without roulette), MMLT, path-space
@@ -1040,22 +1055,16 @@ fn bootstrap_weights_in_reused_storage_equal_fresh_samples() {
         }
         nonzero
     }
-    let mut total = [0; 5];
-    for name in builtin::BUILTIN {
-        let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((W, H))).unwrap();
-        let cmlt = light_transport::cmlt::Cmlt::new(&scene, Default::default()).unwrap();
-        let n = [
-            check(&pssmlt(ImportanceKind::Luminance), &scene, "pssmlt"),
-            check(&with_roulette, &scene, "pssmlt with roulette"),
-            check(&mmlt, &scene, "mmlt"),
-            check(&mlt, &scene, "path-space mlt"),
-            check(&cmlt, &scene, "charted mlt"),
-        ];
-        println!("{name}: nonzero weights {n:?} of 2000 each");
-        for (t, k) in total.iter_mut().zip(n) {
-            *t += k;
-        }
-    }
+    let total = nonzero_over_builtins(|scene| {
+        let cmlt = light_transport::cmlt::Cmlt::new(scene, Default::default()).unwrap();
+        [
+            check(&pssmlt(ImportanceKind::Luminance), scene, "pssmlt"),
+            check(&with_roulette, scene, "pssmlt with roulette"),
+            check(&mmlt, scene, "mmlt"),
+            check(&mlt, scene, "path-space mlt"),
+            check(&cmlt, scene, "charted mlt"),
+        ]
+    });
     assert!(
         total.iter().all(|&k| k > 500),
         "too few samples carry light to compare: {total:?}"
@@ -1102,26 +1111,20 @@ fn a_bootstrap_walked_once_for_every_length_is_each_length_alone() {
     let mlt_apart = PathMlt::new(Mutations::new(MAX_EDGES))
         .unwrap()
         .without_direct();
-    let mut total = [0; 6];
-    for name in builtin::BUILTIN {
-        let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((W, H))).unwrap();
-        let cmlt = Cmlt::new(&scene, Default::default()).unwrap();
-        let cmlt_apart = Cmlt::new(&scene, Default::default())
+    let total = nonzero_over_builtins(|scene| {
+        let cmlt = Cmlt::new(scene, Default::default()).unwrap();
+        let cmlt_apart = Cmlt::new(scene, Default::default())
             .unwrap()
             .without_direct();
-        let n = [
-            check(&mmlt(), &scene, "mmlt"),
-            check(&mmlt().without_direct(), &scene, "mmlt, direct apart"),
-            check(&mlt, &scene, "path-space mlt"),
-            check(&mlt_apart, &scene, "path-space mlt, direct apart"),
-            check(&cmlt, &scene, "charted mlt"),
-            check(&cmlt_apart, &scene, "charted mlt, direct apart"),
-        ];
-        println!("{name}: nonzero weights {n:?}");
-        for (t, k) in total.iter_mut().zip(n) {
-            *t += k;
-        }
-    }
+        [
+            check(&mmlt(), scene, "mmlt"),
+            check(&mmlt().without_direct(), scene, "mmlt, direct apart"),
+            check(&mlt, scene, "path-space mlt"),
+            check(&mlt_apart, scene, "path-space mlt, direct apart"),
+            check(&cmlt, scene, "charted mlt"),
+            check(&cmlt_apart, scene, "charted mlt, direct apart"),
+        ]
+    });
     assert!(
         total.iter().all(|&k| k > 300),
         "too few samples carry light to compare: {total:?}"

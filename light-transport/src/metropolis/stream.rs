@@ -1,14 +1,13 @@
 //! A [`SampleStream`] over a lazy primary-sample state: path construction reads the state's
 //! coordinates, which are created or brought up to date on demand.
 
-use crate::sampler::{STREAMS, SampleStream};
+use crate::sampler::{Cursor, SampleStream};
 use mcmc_core::primary_sample::PrimarySample;
 
 /// Reads a [`PrimarySample`] in the renderer's stream layout.
 pub struct PrimaryStream<'a> {
     sample: &'a mut PrimarySample,
-    current: usize,
-    pos: [usize; STREAMS],
+    cursor: Cursor,
 }
 
 impl<'a> PrimaryStream<'a> {
@@ -16,26 +15,24 @@ impl<'a> PrimaryStream<'a> {
     pub fn new(sample: &'a mut PrimarySample) -> Self {
         Self {
             sample,
-            current: 0,
-            pos: [0; STREAMS],
+            cursor: Cursor::default(),
         }
     }
 }
 
 impl SampleStream for PrimaryStream<'_> {
     fn start_stream(&mut self, index: usize) {
-        self.current = index;
+        self.cursor.start(index);
     }
     #[inline]
     fn next_1d(&mut self) -> f64 {
-        let i = self.pos[self.current];
-        self.pos[self.current] += 1;
-        self.sample.get(self.current, i)
+        let (stream, i) = self.cursor.advance();
+        self.sample.get(stream, i)
     }
     fn seek(&mut self, index: usize) {
-        self.pos[self.current] = index;
+        self.cursor.seek(index);
     }
     fn position(&self) -> usize {
-        self.pos[self.current]
+        self.cursor.position()
     }
 }

@@ -8,15 +8,14 @@
 //! [`super::IndependentStream`]'s) gives a number the next value in draw order instead, which
 //! depends on what was read before it.
 
-use super::{STREAMS, SampleStream};
+use super::{Cursor, SampleStream};
 use mcmc_core::rng::counter_uniform;
 
 /// Numbers addressed by `(key, substream, position)`.
 #[derive(Clone, Debug)]
 pub struct KeyedStream {
     key: u64,
-    current: usize,
-    pos: [usize; STREAMS],
+    cursor: Cursor,
 }
 
 impl KeyedStream {
@@ -24,8 +23,7 @@ impl KeyedStream {
     pub fn new(key: u64) -> Self {
         Self {
             key,
-            current: 0,
-            pos: [0; STREAMS],
+            cursor: Cursor::default(),
         }
     }
 
@@ -45,19 +43,18 @@ impl KeyedStream {
 
 impl SampleStream for KeyedStream {
     fn start_stream(&mut self, index: usize) {
-        self.current = index;
+        self.cursor.start(index);
     }
     #[inline]
     fn next_1d(&mut self) -> f64 {
-        let i = self.pos[self.current];
-        self.pos[self.current] += 1;
-        self.number(self.current, i)
+        let (stream, i) = self.cursor.advance();
+        self.number(stream, i)
     }
     fn seek(&mut self, index: usize) {
-        self.pos[self.current] = index;
+        self.cursor.seek(index);
     }
     fn position(&self) -> usize {
-        self.pos[self.current]
+        self.cursor.position()
     }
 }
 

@@ -143,6 +143,44 @@ impl<S: SampleStream + ?Sized> SampleStream for &mut S {
     }
 }
 
+/// Where a stream reads: its current substream and each substream's position, the part every
+/// stream of the renderer's layout shares.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Cursor {
+    current: usize,
+    pos: [usize; STREAMS],
+}
+
+impl Cursor {
+    /// The current substream.
+    #[inline]
+    pub fn current(&self) -> usize {
+        self.current
+    }
+    /// Continue reading substream `index` ([`SampleStream::start_stream`]).
+    #[inline]
+    pub fn start(&mut self, index: usize) {
+        self.current = index;
+    }
+    /// The `(substream, position)` of the next number, moving past it.
+    #[inline]
+    pub fn advance(&mut self) -> (usize, usize) {
+        let i = self.pos[self.current];
+        self.pos[self.current] += 1;
+        (self.current, i)
+    }
+    /// Move the current substream to position `index` ([`SampleStream::seek`]).
+    #[inline]
+    pub fn seek(&mut self, index: usize) {
+        self.pos[self.current] = index;
+    }
+    /// Position in the current substream ([`SampleStream::position`]).
+    #[inline]
+    pub fn position(&self) -> usize {
+        self.pos[self.current]
+    }
+}
+
 /// Fresh independent numbers from a generator: a [`ChainRng`] by default, or a
 /// [`FastRng`](mcmc_core::rng::FastRng) for a stream that lives for one path (a new-path
 /// proposal, a bootstrap sample, a pass-based estimator's sample). Positions are tracked
@@ -152,8 +190,7 @@ impl<S: SampleStream + ?Sized> SampleStream for &mut S {
 pub struct IndependentStream<R = ChainRng> {
     /// The generator.
     pub rng: R,
-    current: usize,
-    pos: [usize; STREAMS],
+    cursor: Cursor,
 }
 
 impl<R> IndependentStream<R> {
@@ -161,36 +198,34 @@ impl<R> IndependentStream<R> {
     pub fn new(rng: R) -> Self {
         Self {
             rng,
-            current: 0,
-            pos: [0; STREAMS],
+            cursor: Cursor::default(),
         }
     }
 
     /// The current substream.
     pub fn current(&self) -> usize {
-        self.current
+        self.cursor.current()
     }
 
     /// Reset positions for a new sample (numbers stay fresh).
     pub fn new_sample(&mut self) {
-        self.pos = [0; STREAMS];
-        self.current = 0;
+        self.cursor = Cursor::default();
     }
 }
 
 impl<R: rand::Rng> SampleStream for IndependentStream<R> {
     fn start_stream(&mut self, index: usize) {
-        self.current = index;
+        self.cursor.start(index);
     }
     fn next_1d(&mut self) -> f64 {
-        self.pos[self.current] += 1;
+        self.cursor.advance();
         uniform(&mut self.rng)
     }
     fn seek(&mut self, index: usize) {
-        self.pos[self.current] = index;
+        self.cursor.seek(index);
     }
     fn position(&self) -> usize {
-        self.pos[self.current]
+        self.cursor.position()
     }
 }
 
@@ -200,8 +235,7 @@ impl<R: rand::Rng> SampleStream for IndependentStream<R> {
 #[derive(Clone, Debug)]
 pub struct ReplayStream<'a> {
     data: [&'a [f64]; STREAMS],
-    current: usize,
-    pos: [usize; STREAMS],
+    cursor: Cursor,
     exhausted: bool,
 }
 
@@ -210,8 +244,7 @@ impl<'a> ReplayStream<'a> {
     pub fn new(camera: &'a [f64], light: &'a [f64], technique: &'a [f64]) -> Self {
         Self {
             data: [camera, light, technique],
-            current: 0,
-            pos: [0; STREAMS],
+            cursor: Cursor::default(),
             exhausted: false,
         }
     }
@@ -224,12 +257,11 @@ impl<'a> ReplayStream<'a> {
 
 impl SampleStream for ReplayStream<'_> {
     fn start_stream(&mut self, index: usize) {
-        self.current = index;
+        self.cursor.start(index);
     }
     fn next_1d(&mut self) -> f64 {
-        let i = self.pos[self.current];
-        self.pos[self.current] += 1;
-        match self.data[self.current].get(i) {
+        let (stream, i) = self.cursor.advance();
+        match self.data[stream].get(i) {
             Some(&v) => v,
             None => {
                 self.exhausted = true;
@@ -238,10 +270,10 @@ impl SampleStream for ReplayStream<'_> {
         }
     }
     fn seek(&mut self, index: usize) {
-        self.pos[self.current] = index;
+        self.cursor.seek(index);
     }
     fn position(&self) -> usize {
-        self.pos[self.current]
+        self.cursor.position()
     }
 }
 
@@ -263,8 +295,7 @@ pub trait WritableStream: SampleStream {
 #[derive(Debug)]
 pub struct SliceStream<'a> {
     data: [&'a mut [f64]; 2],
-    current: usize,
-    pos: [usize; STREAMS],
+    cursor: Cursor,
     overflowed: bool,
 }
 
@@ -273,8 +304,7 @@ impl<'a> SliceStream<'a> {
     pub fn new(camera: &'a mut [f64], light: &'a mut [f64]) -> Self {
         Self {
             data: [camera, light],
-            current: 0,
-            pos: [0; STREAMS],
+            cursor: Cursor::default(),
             overflowed: false,
         }
     }
@@ -285,9 +315,8 @@ impl<'a> SliceStream<'a> {
     }
 
     fn slot(&mut self) -> Option<&mut f64> {
-        let i = self.pos[self.current];
-        self.pos[self.current] += 1;
-        let slot = self.data.get_mut(self.current).and_then(|d| d.get_mut(i));
+        let (stream, i) = self.cursor.advance();
+        let slot = self.data.get_mut(stream).and_then(|d| d.get_mut(i));
         if slot.is_none() {
             self.overflowed = true;
         }
@@ -297,16 +326,16 @@ impl<'a> SliceStream<'a> {
 
 impl SampleStream for SliceStream<'_> {
     fn start_stream(&mut self, index: usize) {
-        self.current = index;
+        self.cursor.start(index);
     }
     fn next_1d(&mut self) -> f64 {
         self.slot().map_or(0.5, |v| *v)
     }
     fn seek(&mut self, index: usize) {
-        self.pos[self.current] = index;
+        self.cursor.seek(index);
     }
     fn position(&self) -> usize {
-        self.pos[self.current]
+        self.cursor.position()
     }
 }
 
