@@ -25,6 +25,17 @@ pub struct ChainJacobian {
     pub last: Mat2,
 }
 
+impl Default for ChainJacobian {
+    /// No blocks (storage for [`chain_jacobian_into`]).
+    fn default() -> Self {
+        Self {
+            a: BlockTridiagonal::default(),
+            first: Mat2::zeros(),
+            last: Mat2::zeros(),
+        }
+    }
+}
+
 /// The Jacobian of `chain` (`x_0 … x_{m+1}`, `m ≥ 1`), the endpoints displaced in the bases
 /// `first_basis` and `last_basis` and every specular vertex in its own tangent frame.
 pub fn chain_jacobian(
@@ -32,9 +43,25 @@ pub fn chain_jacobian(
     first_basis: (DVec3, DVec3),
     last_basis: (DVec3, DVec3),
 ) -> Option<ChainJacobian> {
-    let m = chain.len().checked_sub(2).filter(|&m| m >= 1)?;
-    let mut a = BlockTridiagonal::default();
-    let (mut first, mut last) = (Mat2::zeros(), Mat2::zeros());
+    let mut j = ChainJacobian::default();
+    chain_jacobian_into(chain, first_basis, last_basis, &mut j).then_some(j)
+}
+
+/// [`chain_jacobian`] into `j`, whose storage it reuses (a walk computes one per iteration, and
+/// moving each out of the call copied its blocks): `false`, `j` then undefined, where it has none.
+pub fn chain_jacobian_into(
+    chain: &[ChainVertex],
+    first_basis: (DVec3, DVec3),
+    last_basis: (DVec3, DVec3),
+    j: &mut ChainJacobian,
+) -> bool {
+    let Some(m) = chain.len().checked_sub(2).filter(|&m| m >= 1) else {
+        return false;
+    };
+    let a = &mut j.a;
+    a.lower.clear();
+    a.diagonal.clear();
+    a.upper.clear();
     for i in 1..=m {
         let prev_basis = if i == 1 {
             first_basis
@@ -46,35 +73,41 @@ pub fn chain_jacobian(
         } else {
             chain[i + 1].tangent_basis()
         };
-        let b = jacobian_blocks(
+        let Some(b) = jacobian_blocks(
             chain[i - 1].p(),
             prev_basis,
             &chain[i],
             chain[i + 1].p(),
             next_basis,
-        )?;
+        ) else {
+            return false;
+        };
         if i == 1 {
-            first = b.lower;
+            j.first = b.lower;
         }
         if i == m {
-            last = b.upper;
+            j.last = b.upper;
         }
         a.lower.push(b.lower);
         a.diagonal.push(b.diagonal);
         a.upper.push(b.upper);
     }
-    Some(ChainJacobian { a, first, last })
+    true
 }
 
 /// The tangent map of a chain: `(∂x_1/∂x_{m+1}, ∂x_m/∂x_0)`, each vertex in its geometric tangent
 /// frame. `None` when the chain has no specular vertex or `A` is singular.
 pub fn tangent_map(chain: &[ChainVertex]) -> Option<(Mat2, Mat2)> {
     let n = chain.len();
-    let j = chain_jacobian(
+    let mut j = ChainJacobian::default();
+    if !chain_jacobian_into(
         chain,
         chain[0].tangent_basis(),
         chain[n - 1].tangent_basis(),
-    )?;
+        &mut j,
+    ) {
+        return None;
+    }
     let m = j.a.len();
     // Columns 0–1: the last endpoint's column of −B; columns 2–3: the first endpoint's.
     let mut rhs: PerVertex<_> = smallvec::smallvec![nalgebra::SMatrix::<f64, 2, 4>::zeros(); m];

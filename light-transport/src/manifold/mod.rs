@@ -26,15 +26,15 @@ pub mod walk;
 pub use chain::{ChainVertex, Interaction, scatter};
 pub use constraint::{Blocks, constraint, constraint_in, jacobian_blocks};
 pub use geometry_term::{
-    ChainJacobian, chain_jacobian, generalized_geometry, generalized_geometry_reverse,
-    ordinary_geometry, tangent_map,
+    ChainJacobian, chain_jacobian, chain_jacobian_into, generalized_geometry,
+    generalized_geometry_reverse, ordinary_geometry, tangent_map,
 };
 pub use specular_probability::SpecularProbability;
 pub use tridiagonal::BlockTridiagonal;
 pub use vmf::VonMisesFisher;
 pub use walk::{
     ManifoldSettings, NO_MATERIAL, WalkFailure, WalkStats, Walked, endpoint_plane, trace_chain,
-    walk_manifold, walk_reversibly,
+    walk_manifold, walk_manifold_into, walk_reversibly, walk_reversibly_into,
 };
 
 /// Vertices of a chain kept inline, endpoints included: a manifold walk or a Jacobian of a chain of

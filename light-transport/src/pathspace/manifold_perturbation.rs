@@ -68,9 +68,10 @@ use super::walk::trace_between;
 use crate::bsdf::TransportMode;
 use crate::light::LightKind;
 use crate::manifold::{
-    Chain, ChainVertex, Interaction, ManifoldSettings, NO_MATERIAL, PerVertex, SpecularProbability,
-    VonMisesFisher, WalkStats, chain_jacobian, constraint, generalized_geometry,
-    generalized_geometry_reverse, ordinary_geometry, scatter, walk_manifold, walk_reversibly,
+    Chain, ChainJacobian, ChainVertex, Interaction, ManifoldSettings, NO_MATERIAL, PerVertex,
+    SpecularProbability, VonMisesFisher, WalkStats, Walked, chain_jacobian_into, constraint,
+    generalized_geometry, generalized_geometry_reverse, ordinary_geometry, scatter,
+    walk_manifold_into, walk_reversibly_into,
 };
 use crate::math::DVec3;
 use crate::metropolis::ImportanceKind;
@@ -685,18 +686,28 @@ impl<'a> ManifoldPerturbation<'a> {
             scene.primitive_material[target.primitive as usize]
         };
         let target = ChainVertex::new(scene, *target, material, Interaction::Reflect, [0.0; 2]);
+        // The walk is written in place here (a chain is about a kilobyte).
+        let mut forward = Walked::default();
         let walked = match self.stats.lock() {
             Ok(mut stats) if self.settings.defect == Some(ManifoldDefect::SkipReverseWalk) => {
-                let forward = walk_manifold(scene, &chain, &target, &self.settings.walk);
-                stats.record(chain.len() - 2, &forward);
-                forward.ok()
+                let result =
+                    walk_manifold_into(scene, &chain, &target, &self.settings.walk, &mut forward);
+                stats.record_iterations(chain.len() - 2, result.map(|()| forward.iterations));
+                result.is_ok()
             }
-            Ok(mut stats) => {
-                walk_reversibly(scene, &chain, &target, &self.settings.walk, &mut stats)
-            }
-            Err(_) => None,
+            Ok(mut stats) => walk_reversibly_into(
+                scene,
+                &chain,
+                &target,
+                &self.settings.walk,
+                &mut stats,
+                &mut forward,
+            ),
+            Err(_) => false,
         };
-        let forward = walked.ok_or(Failure::Failed)?;
+        if !walked {
+            return Err(Failure::Failed);
+        }
         let m = forward.chain.len();
         for (cv, &i) in forward.chain[1..m - 1].iter().zip(second) {
             let v = &mut out[i];
@@ -886,35 +897,14 @@ fn chain_vertex(
     i: usize,
     specular: bool,
 ) -> Option<ChainVertex> {
-    let v = &path.vertices[i];
-    let material = match v.kind {
-        VertexKind::Camera => NO_MATERIAL,
-        VertexKind::Light { light } => match scene.lights[light as usize] {
-            LightKind::Area { primitive, .. } => scene.primitive_material[primitive as usize],
-            LightKind::Point { .. } => NO_MATERIAL,
-        },
-        VertexKind::Surface => scene.primitive_material[v.point.primitive as usize],
-    };
-    let mut cv = ChainVertex::new(scene, v.point, material, Interaction::Reflect, [0.0; 2]);
-    if !specular {
-        return Some(cv);
-    }
-    if refracts(path, i) {
-        cv.interaction = Interaction::Refract {
-            eta: v.bsdf.as_ref()?.eta()?,
-        };
-    }
-    if !path.specular(i) {
-        let o = constraint(path.vertices[i - 1].p(), &cv, path.vertices[i + 1].p())?;
-        cv.offset = [o[0], o[1]];
-    }
-    Some(cv)
+    let mut chain = Chain::new();
+    push_chain(scene, path, [(i, specular)], &mut chain).then(|| chain[0])
 }
 
 /// Push the chain vertices of `path` at `vertices` (each index with whether it is to be specular,
-/// [`chain_vertex`]) onto `chain`, in order; `false` when one has none. One move per vertex into
-/// the caller's list: collecting them through `Option` moved each (264 bytes) twice and the list
-/// once more.
+/// [`chain_vertex`]) onto `chain`, in order; `false` when one has none. Each vertex is built in
+/// its slot of the list (a vertex is 264 bytes; returning each from a call and moving it in was
+/// a quarter of MEMLT's copying on `pool`).
 fn push_chain(
     scene: &Scene,
     path: &super::FullPath,
@@ -922,10 +912,40 @@ fn push_chain(
     chain: &mut Chain,
 ) -> bool {
     for (i, specular) in vertices {
-        let Some(v) = chain_vertex(scene, path, i, specular) else {
+        let v = &path.vertices[i];
+        let material = match v.kind {
+            VertexKind::Camera => NO_MATERIAL,
+            VertexKind::Light { light } => match scene.lights[light as usize] {
+                LightKind::Area { primitive, .. } => scene.primitive_material[primitive as usize],
+                LightKind::Point { .. } => NO_MATERIAL,
+            },
+            VertexKind::Surface => scene.primitive_material[v.point.primitive as usize],
+        };
+        chain.push(ChainVertex::new(
+            scene,
+            v.point,
+            material,
+            Interaction::Reflect,
+            [0.0; 2],
+        ));
+        if !specular {
+            continue;
+        }
+        let Some(cv) = chain.last_mut() else {
             return false;
         };
-        chain.push(v);
+        if refracts(path, i) {
+            let Some(eta) = v.bsdf.as_ref().and_then(|b| b.eta()) else {
+                return false;
+            };
+            cv.interaction = Interaction::Refract { eta };
+        }
+        if !path.specular(i) {
+            let Some(o) = constraint(path.vertices[i - 1].p(), cv, path.vertices[i + 1].p()) else {
+                return false;
+            };
+            cv.offset = [o[0], o[1]];
+        }
     }
     true
 }
@@ -947,11 +967,15 @@ pub fn glossy_determinant(scene: &Scene, path: &super::FullPath, s: &Strategy) -
     }
     let n = chain.len();
     let m = n - 2;
-    let j = chain_jacobian(
+    let mut j = ChainJacobian::default();
+    if !chain_jacobian_into(
         &chain,
         chain[0].tangent_basis(),
         chain[n - 1].tangent_basis(),
-    )?;
+        &mut j,
+    ) {
+        return None;
+    }
     let mut a = nalgebra::DMatrix::<f64>::zeros(2 * m, 2 * m);
     for r in 0..m {
         if lo + 1 + r == s.b {
