@@ -80,7 +80,7 @@ impl Primitive {
                 point.local[1],
                 shading.get(tri.shading as usize),
             ),
-            Primitive::Sphere(s) => s.derivatives(point.n, point.local[0]),
+            Primitive::Sphere(s) => s.derivatives(point.n, s.local(point.n)[0]),
         }
     }
 
@@ -88,7 +88,7 @@ impl Primitive {
     fn texture_coordinates(&self, point: &SurfacePoint) -> [f64; 2] {
         match self {
             Primitive::Triangle(tri) => tri.texture_coordinates(point.local[0], point.local[1]),
-            Primitive::Sphere(_) => Sphere::texture_coordinates(point.local),
+            Primitive::Sphere(s) => Sphere::texture_coordinates(s.local(point.n)),
         }
     }
 
@@ -1141,7 +1141,7 @@ mod tests {
                 .expect("the sphere");
             assert_eq!(
                 bvh.derivatives(&below.point),
-                ball.derivatives(below.point.n, below.point.local[0])
+                ball.derivatives(below.point.n, ball.local(below.point.n)[0])
             );
         }
         let lens = SurfacePoint::flat(DVec3::ZERO, DVec3::Z, u32::MAX);

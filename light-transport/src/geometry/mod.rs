@@ -39,7 +39,8 @@ pub struct SurfacePoint {
     pub tangent: DVec3,
     /// The point's coordinates on its primitive, from which its [`Derivatives`] and its texture
     /// coordinates are computed (`Bvh::derivatives`, `Bvh::texture_coordinates`): a triangle's
-    /// barycentrics `(b1, b2)`, a sphere's `(φ, cos θ)` (zero off the scene's surfaces).
+    /// barycentrics `(b1, b2)`; zero on spheres (whose `(φ, cos θ)`, `Sphere::local`, follow from
+    /// the normal) and off the scene's surfaces.
     pub local: [f64; 2],
     /// Index of the primitive in the scene.
     pub primitive: u32,
