@@ -306,8 +306,8 @@ pub fn walk_reversibly(
 }
 
 /// [`walk_reversibly`] into `forward`, whose storage it reuses (a chain is about a kilobyte, and
-/// moving the walks' results out of each call was a third of MEMLT's copying on `pool`): `true`
-/// when the walk succeeded and is reversible, `forward` then holding it.
+/// moving the walks' results out of each call was about a fifth of MEMLT's copying on `pool`):
+/// `true` when the walk succeeded and is reversible, `forward` then holding it.
 pub fn walk_reversibly_into(
     scene: &Scene,
     chain: &[ChainVertex],
