@@ -147,7 +147,7 @@ fn the_analytic_sphere_matches_a_fine_mesh_sphere() {
         // The mesh's derivatives as manifold walks get them: computed on demand from the hit.
         let (dm, de) = (
             scene.bvh.derivatives(&mesh),
-            sphere.derivatives(exact.n, exact.local[0]),
+            sphere.derivatives(exact.n, sphere.local(exact.n)[0]),
         );
         let e = [
             rel(mesh.ns, exact.ns),

@@ -36,7 +36,7 @@ fn random_point(rng: &mut ChainRng) -> (SurfacePoint, Derivatives) {
         };
         let dir = r3(rng).normalize();
         let point = s.point(s.center + dir * s.radius, 0);
-        (point, s.derivatives(point.n, point.local[0]))
+        (point, s.derivatives(point.n, s.local(point.n)[0]))
     } else {
         let base = r3(rng) * 3.0;
         let p = [0, 1, 2].map(|_| base + r3(rng));
