@@ -114,13 +114,8 @@ pub struct WalkStats {
 }
 
 impl WalkStats {
-    /// Count one walk over `m` specular vertices.
-    pub fn record(&mut self, m: usize, result: &Result<Walked, WalkFailure>) {
-        self.record_iterations(m, result.as_ref().map(|w| w.iterations).map_err(|f| *f));
-    }
-
-    /// [`WalkStats::record`] of a walk that took `result` iterations or failed.
-    pub fn record_iterations(&mut self, m: usize, result: Result<usize, WalkFailure>) {
+    /// Count one walk over `m` specular vertices that converged in `result` iterations or failed.
+    pub fn record(&mut self, m: usize, result: Result<usize, WalkFailure>) {
         self.walks += 1;
         self.vertices += m as u64;
         self.max_vertices = self.max_vertices.max(m as u64);
@@ -318,7 +313,7 @@ pub fn walk_reversibly_into(
 ) -> bool {
     let m = chain.len() - 2;
     let result = walk_manifold_into(scene, chain, target, settings, forward);
-    stats.record_iterations(m, result.map(|()| forward.iterations));
+    stats.record(m, result.map(|()| forward.iterations));
     if result.is_err() {
         return false;
     }

@@ -692,7 +692,7 @@ impl<'a> ManifoldPerturbation<'a> {
             Ok(mut stats) if self.settings.defect == Some(ManifoldDefect::SkipReverseWalk) => {
                 let result =
                     walk_manifold_into(scene, &chain, &target, &self.settings.walk, &mut forward);
-                stats.record_iterations(chain.len() - 2, result.map(|()| forward.iterations));
+                stats.record(chain.len() - 2, result.map(|()| forward.iterations));
                 result.is_ok()
             }
             Ok(mut stats) => walk_reversibly_into(
