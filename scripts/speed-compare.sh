@@ -87,9 +87,16 @@ for scene in $scenes; do
   name=$(scene_name "$scene")
   for algo in $algos; do
     : > "$out/old" && : > "$out/new"
-    for _ in $(seq 1 "$rounds"); do
-      run "$old_bin" "$scene" "$algo" >> "$out/old"
-      run "$new_bin" "$scene" "$algo" >> "$out/new"
+    # The order alternates by round (old-new, new-old, ...): a run that always follows the
+    # other build's would carry whatever that run leaves behind (caches, the CPU's clock).
+    for r in $(seq 1 "$rounds"); do
+      if ((r % 2)); then
+        run "$old_bin" "$scene" "$algo" >> "$out/old"
+        run "$new_bin" "$scene" "$algo" >> "$out/new"
+      else
+        run "$new_bin" "$scene" "$algo" >> "$out/new"
+        run "$old_bin" "$scene" "$algo" >> "$out/old"
+      fi
     done
     to=$(cut -d' ' -f1 "$out/old" | median) tn=$(cut -d' ' -f1 "$out/new" | median)
     mo=$(cut -d' ' -f2 "$out/old" | sort -g | tail -1) mn=$(cut -d' ' -f2 "$out/new" | sort -g | tail -1)
