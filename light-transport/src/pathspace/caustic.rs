@@ -86,10 +86,10 @@ impl Mutation for Caustic<'_> {
         let k = xp.edges();
         let w_x = direction(&xp.vertices[i0], &xp.vertices[i0 + 1]);
         let mut w = angular_offset(w_x, self.settings.theta1, self.settings.theta2, rng);
-        // ȳ is walked in place: a copy of x̄ (v_0 … v_{i0} and the lens point are kept) whose
-        // v'_{i0+1} … v'_{k−1} are traced into their slots.
+        // ȳ is walked in place: x̄'s v_0 … v_{i0} and lens point kept, v'_{i0+1} … v'_{k−1}
+        // traced into their slots (each trace rewrites its slot whole).
+        y.path.splice_from(xp, i0 + 1, k + 1, 1);
         let yv = &mut y.path.vertices;
-        yv.clone_from(&xp.vertices);
         for i in i0 + 1..k {
             if !trace_between(scene, yv, i - 1, i, w) {
                 return Err(Failure::Failed);

@@ -61,7 +61,7 @@
 //! success for pairs this mutation did not propose; [`super::Mutations::validate`] refuses it).
 
 use super::mutation::{Change, Mutation, MutationContext, Registration};
-use super::path::arriving_throughput;
+use super::path::{Walks, arriving_throughput};
 use super::perturbation::{direction, follow_specular, refracts, scatters_diffusely};
 use super::state::PathState;
 use super::walk::trace_between;
@@ -532,7 +532,7 @@ impl<'a> ManifoldPerturbation<'a> {
             Some(ManifoldDefect::FirstChainGeometry) => 1.0,
             _ => chain_geometry(self.scene, yp, s.a, s.b, s.a),
         };
-        let f = contribution(self.scene, yp, s);
+        let f = contribution(self.scene, yp, Some(&y.walks), s);
         let i = f.map_or(0.0, |f| self.importance.of(f));
         if !(density > 0.0 && cos_a > 0.0 && g_a > 0.0 && i > 0.0) {
             return never;
@@ -578,8 +578,8 @@ impl<'a> ManifoldPerturbation<'a> {
         }
         let g = (-d.length_squared() / (2.0 * sigma * sigma)).exp()
             / (std::f64::consts::TAU * sigma * sigma);
-        let i =
-            position_contribution(self.scene, &y.path, s).map_or(0.0, |f| self.importance.of(f));
+        let i = position_contribution(self.scene, &y.path, Some(&y.walks), s)
+            .map_or(0.0, |f| self.importance.of(f));
         if !(g > 0.0 && i > 0.0) {
             return never;
         }
@@ -730,14 +730,19 @@ fn coplanar(a: &Vertex, b: &Vertex) -> bool {
 /// weights, the generalised geometry term from the camera end) and the camera side from `x_c`;
 /// nothing is kept on the light side, so no `1/K_L`. Lens point moved: the light side up to `x_c`,
 /// the chain, and `W_e`; nothing kept on the camera side, so no `1/K_C`.
-pub fn position_contribution(scene: &Scene, path: &super::FullPath, s: &Strategy) -> Option<Rgb> {
+pub fn position_contribution(
+    scene: &Scene,
+    path: &super::FullPath,
+    walks: Option<&Walks>,
+    s: &Strategy,
+) -> Option<Rgb> {
     let v = &path.vertices;
     let (lo, hi) = s.ends();
     let ends = if s.a == 0 {
-        v[0].le(scene, &v[1]) * camera_side(scene, path, hi)?
+        v[0].le(scene, &v[1]) * camera_side(scene, path, walks, hi)?
     } else {
         let w = direction(&v[hi], &v[hi - 1]);
-        light_side(scene, path, lo)? * scene.camera.importance(v[hi].p(), w).0
+        light_side(scene, path, walks, lo)? * scene.camera.importance(v[hi].p(), w).0
     };
     let mut f = ends * segments_geometry(scene, path, lo, hi);
     for i in lo + 1..hi {
@@ -747,8 +752,14 @@ pub fn position_contribution(scene: &Scene, path: &super::FullPath, s: &Strategy
 }
 
 /// The light side of `path` up to its kept vertex `lo`: the light subpath's throughput arriving
-/// there times `f_s(x_lo)`, or `L_e/p(x_0)` at the light.
-fn light_side(scene: &Scene, path: &super::FullPath, lo: usize) -> Option<Rgb> {
+/// there times `f_s(x_lo)`, or `L_e/p(x_0)` at the light. The throughput is read from `walks`
+/// (the path's evaluation, [`Walks::light_arriving`]) when they are the path's, walked otherwise.
+fn light_side(
+    scene: &Scene,
+    path: &super::FullPath,
+    walks: Option<&Walks>,
+    lo: usize,
+) -> Option<Rgb> {
     let v = &path.vertices;
     if lo == 0 {
         let VertexKind::Light { light } = v[0].kind else {
@@ -758,13 +769,22 @@ fn light_side(scene: &Scene, path: &super::FullPath, lo: usize) -> Option<Rgb> {
             * scene.lights[light as usize].pdf_position();
         return Some(v[0].le(scene, &v[1]) * (1.0 / p));
     }
-    let beta = arriving_throughput(scene, lo + 1, |i| &v[i], TransportMode::Importance)?;
+    let beta = match walks.and_then(|w| w.light_arriving(v, lo)) {
+        Some(beta) => beta?,
+        None => arriving_throughput(scene, lo + 1, |i| &v[i], TransportMode::Importance)?,
+    };
     Some(beta * vertex_factor(scene, path, lo))
 }
 
 /// The camera side of `path` from its kept vertex `hi`: `f_s(x_hi)` times the camera walk's
-/// throughput arriving there, or `W_e/p(lens)` at the lens.
-fn camera_side(scene: &Scene, path: &super::FullPath, hi: usize) -> Option<Rgb> {
+/// throughput arriving there (from `walks` when they are the path's, as for [`light_side`]), or
+/// `W_e/p(lens)` at the lens.
+fn camera_side(
+    scene: &Scene,
+    path: &super::FullPath,
+    walks: Option<&Walks>,
+    hi: usize,
+) -> Option<Rgb> {
     let v = &path.vertices;
     let k = path.edges();
     if hi == k {
@@ -773,7 +793,10 @@ fn camera_side(scene: &Scene, path: &super::FullPath, hi: usize) -> Option<Rgb> 
             scene.camera.importance(v[k].p(), w).0 / scene.camera.pdf_lens(),
         ));
     }
-    let beta = arriving_throughput(scene, k - hi + 1, |i| &v[k - i], TransportMode::Radiance)?;
+    let beta = match walks.and_then(|w| w.camera_arriving(v, hi)) {
+        Some(beta) => beta?,
+        None => arriving_throughput(scene, k - hi + 1, |i| &v[k - i], TransportMode::Radiance)?,
+    };
     Some(beta * vertex_factor(scene, path, hi))
 }
 
@@ -1076,13 +1099,19 @@ fn vertex_factor(scene: &Scene, path: &super::FullPath, i: usize) -> Rgb {
 }
 
 /// `F = f / (K_L K_C)` of `path` with the specular vertices between the ends of `s` integrated out
-/// (module docs); `None` when a factor is missing.
-pub fn contribution(scene: &Scene, path: &super::FullPath, s: &Strategy) -> Option<Rgb> {
+/// (module docs); `None` when a factor is missing. `walks`, the path's own evaluation, spares
+/// walking the two kept sides again ([`Walks::light_arriving`]; the same numbers bit for bit).
+pub fn contribution(
+    scene: &Scene,
+    path: &super::FullPath,
+    walks: Option<&Walks>,
+    s: &Strategy,
+) -> Option<Rgb> {
     let (lo, hi) = s.ends();
     // A_lo: the light side up to x_lo, with x_lo's factor.
-    let a_lo = light_side(scene, path, lo)?;
+    let a_lo = light_side(scene, path, walks, lo)?;
     // A_hi: the camera side down to x_hi, with x_hi's factor.
-    let a_hi = camera_side(scene, path, hi)?;
+    let a_hi = camera_side(scene, path, walks, hi)?;
     let mut f = a_lo * a_hi;
     for i in lo + 1..hi {
         f *= vertex_factor(scene, path, i);

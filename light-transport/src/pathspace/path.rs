@@ -85,6 +85,31 @@ impl Walks {
         self.valid
     }
 
+    /// The throughput over density with which the light walk arrives at vertex `i` of
+    /// `vertices`, bit for bit what [`arriving_throughput`] of `v_0 … v_i` gives (`Some(None)`
+    /// where that is `None`), read from these walks when they were made from the same
+    /// `v_0 … v_i` (the entry reads no later vertex); `None` when they were not, and the caller
+    /// walks itself.
+    pub fn light_arriving(&self, vertices: &[Vertex], i: usize) -> Option<Option<Rgb>> {
+        let (valid, _) = self.valid?;
+        if i >= vertices.len() || self.kept(vertices, i + 1, 0).0 != i + 1 {
+            return None;
+        }
+        Some((valid > i).then(|| self.light[i].beta))
+    }
+
+    /// [`Walks::light_arriving`] of the camera walk: its throughput arriving at vertex `i` of
+    /// `vertices`, walked from the lens `v_k` (what [`arriving_throughput`] of `v_k … v_i`
+    /// gives), when these walks were made from the same `v_i … v_k`.
+    pub fn camera_arriving(&self, vertices: &[Vertex], i: usize) -> Option<Option<Rgb>> {
+        let (_, valid) = self.valid?;
+        let j = vertices.len().checked_sub(i + 1)?;
+        if self.kept(vertices, 0, j + 1).1 != j + 1 {
+            return None;
+        }
+        Some((valid > j).then(|| self.camera[j].beta))
+    }
+
     /// How many of `vertices`' leading (`light`) and trailing (`camera`) vertices, at most
     /// `light` and `camera`, are bit for bit where these walks' vertices were, with the same
     /// delta flags: the vertices whose walk entries can be reused.
@@ -654,6 +679,75 @@ mod tests {
                 "{name}: {paths} paths, {nonzero} values"
             );
             println!("{name}: {paths} paths, {nonzero} nonzero C*_s, {specular} specular");
+        }
+    }
+
+    /// The throughputs a path's evaluation reads from its walks ([`Walks::light_arriving`],
+    /// [`Walks::camera_arriving`]) are bit for bit what walking the path's ends again gives
+    /// ([`arriving_throughput`]), at every vertex of paths of every length in every built-in
+    /// scene, and walks of another path are refused. The test checks itself: the walk's
+    /// neighbouring entry, which an index off by one would read, is another number.
+    #[test]
+    fn walks_give_the_arriving_throughputs() {
+        let mut rng = stream(11, 0);
+        let (mut walks, mut out) = (Walks::default(), Vec::new());
+        let bits = |c: Option<Rgb>| c.map(|c| [0, 1, 2].map(|i| c[i].to_bits()));
+        for name in builtin::all() {
+            let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((32, 24))).unwrap();
+            let mut sampler = IndependentStream::new(stream(12, 0));
+            let (mut paths, mut read, mut neighbours_differ) = (0, 0, 0);
+            let mut previous: Option<FullPath> = None;
+            for _ in 0..100_000 {
+                if paths == 300 {
+                    break;
+                }
+                let k = 1 + (uniform(&mut rng) * 6.0) as usize;
+                let s = ((uniform(&mut rng) * (k + 2) as f64) as usize).min(k + 1);
+                let mut state = PathState::default();
+                sampler.new_sample();
+                if sample_path(&scene, k, s, &mut sampler, &mut state).is_none() {
+                    continue;
+                }
+                let path = &state.path;
+                let v = &path.vertices;
+                path.strategies(&scene, &mut walks, &mut out);
+                for i in 0..v.len() {
+                    let light =
+                        arriving_throughput(&scene, i + 1, |j| &v[j], TransportMode::Importance);
+                    let camera = arriving_throughput(
+                        &scene,
+                        k - i + 1,
+                        |j| &v[k - j],
+                        TransportMode::Radiance,
+                    );
+                    let (Some(l), Some(c)) =
+                        (walks.light_arriving(v, i), walks.camera_arriving(v, i))
+                    else {
+                        panic!("{name}: the path's own walks refused at vertex {i}");
+                    };
+                    assert_eq!(bits(l), bits(light), "{name}, k = {k}, light side at {i}");
+                    assert_eq!(bits(c), bits(camera), "{name}, k = {k}, camera side at {i}");
+                    read += usize::from(l.is_some()) + usize::from(c.is_some());
+                    if l.is_some()
+                        && i + 1 < v.len()
+                        && bits(Some(walks.light[i + 1].beta)) != bits(l)
+                    {
+                        neighbours_differ += 1;
+                    }
+                }
+                if let Some(other) = &previous
+                    && other.vertices[0].p() != v[0].p()
+                {
+                    let foreign = walks.light_arriving(&other.vertices, 0);
+                    assert!(foreign.is_none(), "{name}: walks of another path read");
+                }
+                previous = Some(path.clone());
+                paths += 1;
+            }
+            assert!(
+                paths == 300 && read > 600 && neighbours_differ > 100,
+                "{name}: {paths} paths, {read} throughputs read, {neighbours_differ} neighbours differ"
+            );
         }
     }
 }

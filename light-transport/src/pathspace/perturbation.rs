@@ -293,10 +293,11 @@ pub fn camera_side_propose(
         .camera
         .ray_through(xp.lens().p(), moved)
         .ok_or(Failure::Failed)?;
-    // ȳ is walked in place: it starts as a copy of x̄ (the light part v_0 … v_{s−1} and the lens
-    // point are kept), and v'_{k−1}, v'_{k−2}, … v'_s are traced into their slots from the lens.
+    // ȳ is walked in place: it keeps x̄'s light part v_0 … v_{s−1} and lens point, and
+    // v'_{k−1}, v'_{k−2}, … v'_s are traced into their slots from the lens (each trace rewrites
+    // its slot whole, so the vertices it replaces are not copied first).
+    y.path.splice_from(xp, chain.s, k + 1, 1);
     let yv = &mut y.path.vertices;
-    yv.clone_from(&xp.vertices);
     let mut w = cs.ray.d;
     let mut i = k - 1;
     loop {

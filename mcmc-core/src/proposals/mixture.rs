@@ -28,6 +28,35 @@ use smallvec::SmallVec;
 /// allocation each).
 type PerComponent = SmallVec<[f64; 16]>;
 
+/// Room for one number per component, filled by [`Mixture::suited`]: on the stack for mixtures
+/// of up to 16 components, on the heap beyond. (The selection weights are computed twice at
+/// every step; returned as a small vector they cost a capacity check per component and a copy
+/// of the whole vector out of the call.)
+struct Scratch {
+    inline: [f64; 16],
+    heap: Vec<f64>,
+}
+
+impl Scratch {
+    fn new() -> Self {
+        Self {
+            inline: [0.0; 16],
+            heap: Vec::new(),
+        }
+    }
+
+    /// `n` zeros to fill.
+    #[inline]
+    fn zeros(&mut self, n: usize) -> &mut [f64] {
+        if n <= self.inline.len() {
+            &mut self.inline[..n]
+        } else {
+            self.heap.resize(n, 0.0);
+            &mut self.heap
+        }
+    }
+}
+
 /// Which transition-density rule a [`Mixture`] reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MixtureRule {
@@ -181,7 +210,8 @@ impl<'a, S> Mixture<'a, S> {
         }
         let k = self.kind_offsets.partition_point(|&o| o <= kind) - 1;
         // `ln_selection_in(x)[k]`, without the other components' logarithms.
-        let Some(w) = self.suited(x) else {
+        let mut scratch = Scratch::new();
+        let Some(w) = self.suited(x, &mut scratch) else {
             return self.ln_weights[k];
         };
         let total: f64 = w.iter().sum();
@@ -194,7 +224,8 @@ impl<'a, S> Mixture<'a, S> {
 
     /// [`Mixture::ln_selection`] on the stack (the acceptance ratio asks for it twice a step).
     fn ln_selection_in(&self, x: &S) -> PerComponent {
-        let Some(w) = self.suited(x) else {
+        let mut scratch = Scratch::new();
+        let Some(w) = self.suited(x, &mut scratch) else {
             return PerComponent::from_slice(&self.ln_weights);
         };
         let total: f64 = w.iter().sum();
@@ -211,24 +242,21 @@ impl<'a, S> Mixture<'a, S> {
 
     /// `w_k s_k(x)` for every component under suitability selection (`None` under fixed
     /// selection, where the normalised base weights are the probabilities).
-    fn suited(&self, x: &S) -> Option<PerComponent> {
+    fn suited<'s>(&self, x: &S, scratch: &'s mut Scratch) -> Option<&'s [f64]> {
         match self.selection {
             Selection::Fixed => None,
-            Selection::Suitability => Some(
-                self.components
-                    .iter()
-                    .zip(&self.weights)
+            Selection::Suitability => {
+                let suited = scratch.zeros(self.components.len());
+                let slots = suited.iter_mut().zip(&self.components).zip(&self.weights);
+                for ((slot, c), &w) in slots {
                     // A component without weight is never chosen: its suitability is not asked
                     // (it may be costly, e.g. a path mutation finding its strategies).
-                    .map(|(c, &w)| {
-                        if w == 0.0 {
-                            0.0
-                        } else {
-                            w * suitability(c.as_ref(), x)
-                        }
-                    })
-                    .collect(),
-            ),
+                    if w != 0.0 {
+                        *slot = w * suitability(c.as_ref(), x);
+                    }
+                }
+                Some(suited)
+            }
         }
     }
 
@@ -277,7 +305,8 @@ impl<'a, S> Mixture<'a, S> {
 /// A component's suitability, with negative and NaN values treated as 0.
 fn suitability<S>(c: &(dyn Proposal<S> + Send + Sync + '_), x: &S) -> f64 {
     let s = c.suitability(x);
-    if s > 0.0 && s.is_finite() { s } else { 0.0 }
+    // `s.is_finite()` classified the number's bits; two comparisons say the same here.
+    if s > 0.0 && s < f64::INFINITY { s } else { 0.0 }
 }
 
 /// `ln Σ exp(t_i)`, exact for `-inf` terms.
@@ -304,7 +333,7 @@ impl<S> Mixture<'_, S> {
             // A candidate its own component rejects outright is rejected whatever the selection
             // probabilities: `y`'s suitabilities (every component's, some costly) are not asked.
             MixtureRule::PerComponent if p.ln_ratio == f64::NEG_INFINITY => p.ln_ratio,
-            MixtureRule::PerComponent => match (suited_x, self.suited(y)) {
+            MixtureRule::PerComponent => match (suited_x, self.suited(y, &mut Scratch::new())) {
                 (Some(sx), Some(sy)) => {
                     // ln P_k(y) − ln P_k(x); the base weight cancels. One logarithm of the
                     // ratio, exactly 0 when both states suit the same components (the usual
@@ -334,14 +363,16 @@ impl<S> Mixture<'_, S> {
 
     /// `Σ_k w_k s_k(x)` (1 under fixed selection).
     fn total_suitability(&self, x: &S) -> f64 {
-        self.suited(x).map_or(1.0, |w| w.iter().sum())
+        self.suited(x, &mut Scratch::new())
+            .map_or(1.0, |w| w.iter().sum())
     }
 }
 
 impl<S> Proposal<S> for Mixture<'_, S> {
     fn propose(&self, x: &S, y: &mut S, rng: &mut ChainRng) -> Proposed {
-        let suited = self.suited(x);
-        let Some(k) = self.choose(suited.as_deref(), uniform(rng)) else {
+        let mut scratch = Scratch::new();
+        let suited = self.suited(x, &mut scratch);
+        let Some(k) = self.choose(suited, uniform(rng)) else {
             // No component suits x (possible only with suitability selection): counted against
             // the first component that has weight, so statistics name a move that was wanted.
             let first = self
@@ -352,7 +383,7 @@ impl<S> Proposal<S> for Mixture<'_, S> {
             return Proposed::failed(self.kind_offsets[first], Failure::NotApplicable);
         };
         let p = self.components[k].propose(x, y, rng);
-        self.report(k, x, y, p, suited.as_deref())
+        self.report(k, x, y, p, suited)
     }
 
     fn ln_move_density(&self, from: &S, to: &S, kind: usize) -> Option<f64> {
@@ -369,13 +400,14 @@ impl<S> Proposal<S> for Mixture<'_, S> {
 
     fn outcomes(&self, x: &S) -> Option<Vec<Outcome<S>>> {
         let mut out = Vec::new();
-        let suited = self.suited(x);
+        let mut scratch = Scratch::new();
+        let suited = self.suited(x, &mut scratch);
         for (k, (c, lw)) in self.components.iter().zip(self.ln_selection(x)).enumerate() {
             if lw == f64::NEG_INFINITY {
                 continue;
             }
             for o in c.outcomes(x)? {
-                let proposed = self.report(k, x, &o.state, o.proposed, suited.as_deref());
+                let proposed = self.report(k, x, &o.state, o.proposed, suited);
                 out.push(Outcome {
                     probability: lw.exp() * o.probability,
                     state: o.state,
