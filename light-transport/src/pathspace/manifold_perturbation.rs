@@ -528,11 +528,14 @@ impl<'a> ManifoldPerturbation<'a> {
             _ => d.pdf(w),
         };
         let cos_a = endpoint_cos(self.scene, &yv[s.a], w);
+        // The chain at x_a seen from x_a (the density's) and both chains from their camera ends
+        // (F's): the chain at x_a is built once for both.
+        let (segments, g_a) = segments_and_first(self.scene, yp, s);
         let g_a = match self.settings.defect {
             Some(ManifoldDefect::FirstChainGeometry) => 1.0,
-            _ => chain_geometry(self.scene, yp, s.a, s.b, s.a),
+            _ => g_a,
         };
-        let f = contribution(self.scene, yp, Some(&y.walks), s);
+        let f = contribution(self.scene, yp, Some(&y.walks), s, segments);
         let i = f.map_or(0.0, |f| self.importance.of(f));
         if !(density > 0.0 && cos_a > 0.0 && g_a > 0.0 && i > 0.0) {
             return never;
@@ -1031,12 +1034,39 @@ pub fn glossy_determinant(scene: &Scene, path: &super::FullPath, s: &Strategy) -
 /// from `lo` to `hi`, each seen from its camera end (the convention of radiance-mode deltas,
 /// module docs).
 fn segments_geometry(scene: &Scene, path: &super::FullPath, lo: usize, hi: usize) -> f64 {
-    let free: smallvec::SmallVec<[usize; 16]> = (lo..=hi)
-        .filter(|&i| i == lo || i == hi || !path.specular(i))
-        .collect();
-    free.windows(2)
+    free_vertices(path, lo, hi)
+        .windows(2)
         .map(|w| chain_geometry(scene, path, w[0], w[1], w[1]))
         .product()
+}
+
+/// `lo`, `hi` and the non-delta vertices of `path` between them.
+fn free_vertices(path: &super::FullPath, lo: usize, hi: usize) -> smallvec::SmallVec<[usize; 16]> {
+    (lo..=hi)
+        .filter(|&i| i == lo || i == hi || !path.specular(i))
+        .collect()
+}
+
+/// [`segments_geometry`] between the ends of strategy `s`, and the generalised geometry term of
+/// the chain from `x_a` to `x_b` seen from `x_a` ([`chain_geometry`]`(a, b, a)`), bit for bit,
+/// with that chain built once for both.
+fn segments_and_first(scene: &Scene, path: &super::FullPath, s: &Strategy) -> (f64, f64) {
+    let (lo, hi) = s.ends();
+    let mut first = None;
+    let segments = free_vertices(path, lo, hi)
+        .windows(2)
+        .map(|w| {
+            if w.contains(&s.a) && w.contains(&s.b) {
+                let sides = chain_geometry_sides(scene, path, w[0], w[1], [s.a == w[0], true]);
+                first = Some(sides[usize::from(s.a == w[1])]);
+                sides[1]
+            } else {
+                chain_geometry(scene, path, w[0], w[1], w[1])
+            }
+        })
+        .product();
+    let first = first.unwrap_or_else(|| chain_geometry(scene, path, s.a, s.b, s.a));
+    (segments, first)
 }
 
 /// The generalised geometry term of `path` between the non-specular vertices `from` and `to`
@@ -1050,13 +1080,30 @@ fn chain_geometry(
     side: usize,
 ) -> f64 {
     let (lo, hi) = (from.min(to), from.max(to));
+    chain_geometry_sides(scene, path, lo, hi, [side == lo, side == hi])[usize::from(side == hi)]
+}
+
+/// [`chain_geometry`] of the chain from `lo` to `hi` (`lo < hi`) seen from `lo` and from `hi`,
+/// each where `sides` asks for it (0 otherwise), the chain built once.
+fn chain_geometry_sides(
+    scene: &Scene,
+    path: &super::FullPath,
+    lo: usize,
+    hi: usize,
+    sides: [bool; 2],
+) -> [f64; 2] {
     let v = &path.vertices;
     if hi == lo + 1 {
         // No specular vertex between: the ordinary geometry term, without chain vertices.
-        let far = if side == hi { lo } else { hi };
-        let w = direction(&v[side], &v[far]);
-        let cos = endpoint_cos(scene, &v[side], w);
-        return ordinary_geometry(v[side].p(), cos, v[far].p(), v[far].point.n).unwrap_or(0.0);
+        let seen_from = |side: usize, far: usize| {
+            let w = direction(&v[side], &v[far]);
+            let cos = endpoint_cos(scene, &v[side], w);
+            ordinary_geometry(v[side].p(), cos, v[far].p(), v[far].point.n).unwrap_or(0.0)
+        };
+        return [
+            if sides[0] { seen_from(lo, hi) } else { 0.0 },
+            if sides[1] { seen_from(hi, lo) } else { 0.0 },
+        ];
     }
     let mut chain = Chain::new();
     if !push_chain(
@@ -1065,15 +1112,17 @@ fn chain_geometry(
         (lo..=hi).map(|i| (i, i != lo && i != hi)),
         &mut chain,
     ) {
-        return 0.0;
+        return [0.0; 2];
     }
-    if side == hi {
-        let w = direction(&v[hi], &v[hi - 1]);
-        generalized_geometry_reverse(&chain, endpoint_cos(scene, &v[hi], w))
-    } else {
+    let from_lo = sides[0].then(|| {
         let w = direction(&v[lo], &v[lo + 1]);
         generalized_geometry(&chain, endpoint_cos(scene, &v[lo], w))
-    }
+    });
+    let from_hi = sides[1].then(|| {
+        let w = direction(&v[hi], &v[hi - 1]);
+        generalized_geometry_reverse(&chain, endpoint_cos(scene, &v[hi], w))
+    });
+    [from_lo.unwrap_or(0.0), from_hi.unwrap_or(0.0)]
 }
 
 /// The path-integral factor of surface vertex `i` of `path` in radiance mode (light arriving from
@@ -1099,13 +1148,15 @@ fn vertex_factor(scene: &Scene, path: &super::FullPath, i: usize) -> Rgb {
 }
 
 /// `F = f / (K_L K_C)` of `path` with the specular vertices between the ends of `s` integrated out
-/// (module docs); `None` when a factor is missing. `walks`, the path's own evaluation, spares
-/// walking the two kept sides again ([`Walks::light_arriving`]; the same numbers bit for bit).
+/// (module docs), given its chains' [`segments_geometry`] `segments`; `None` when a factor is
+/// missing. `walks`, the path's own evaluation, spares walking the two kept sides again
+/// ([`Walks::light_arriving`]; the same numbers bit for bit).
 pub fn contribution(
     scene: &Scene,
     path: &super::FullPath,
     walks: Option<&Walks>,
     s: &Strategy,
+    segments: f64,
 ) -> Option<Rgb> {
     let (lo, hi) = s.ends();
     // A_lo: the light side up to x_lo, with x_lo's factor.
@@ -1116,7 +1167,7 @@ pub fn contribution(
     for i in lo + 1..hi {
         f *= vertex_factor(scene, path, i);
     }
-    let f = f * segments_geometry(scene, path, lo, hi);
+    let f = f * segments;
     (f.is_finite() && !f.is_black()).then_some(f)
 }
 
