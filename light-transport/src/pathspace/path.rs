@@ -639,19 +639,21 @@ mod tests {
             .collect()
     }
 
-    /// The one-walk-per-end evaluation gives exactly (bit for bit) the contributions of retracing
-    /// both subpaths and connecting each strategy, on paths of every length sampled by every
-    /// strategy in every built-in scene (glass, mirrors, shading normals, point and area lights).
-    #[test]
-    fn strategies_equal_connecting_retraced_subpaths() {
-        let mut rng = stream(9, 0);
-        let (mut walks, mut out) = (Walks::default(), Vec::new());
+    /// `per_scene` paths of every built-in scene, each of a random length `k` (1–6 edges) made by
+    /// a random strategy `s`, handed to `each(name, scene, k, s, state)` once sampled; `seeds`
+    /// seed the choices of `k` and `s` and the sampler. Returns nothing: `each` asserts.
+    fn for_sampled_paths(
+        seeds: (u64, u64),
+        per_scene: usize,
+        mut each: impl FnMut(&str, &Scene, usize, usize, &PathState),
+    ) {
+        let mut rng = stream(seeds.0, 0);
         for name in builtin::all() {
             let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((32, 24))).unwrap();
-            let mut sampler = IndependentStream::new(stream(10, 0));
-            let (mut paths, mut nonzero, mut specular) = (0, 0, 0);
+            let mut sampler = IndependentStream::new(stream(seeds.1, 0));
+            let mut paths = 0;
             for _ in 0..100_000 {
-                if paths == 400 {
+                if paths == per_scene {
                     break;
                 }
                 let k = 1 + (uniform(&mut rng) * 6.0) as usize;
@@ -661,24 +663,37 @@ mod tests {
                 if sample_path(&scene, k, s, &mut sampler, &mut state).is_none() {
                     continue;
                 }
-                let path = &state.path;
-                path.strategies(&scene, &mut walks, &mut out);
-                let expected = strategies_by_connection(path, &scene);
-                let bits = |c: &[Option<Rgb>]| -> Vec<Option<[u64; 3]>> {
-                    c.iter()
-                        .map(|c| c.map(|c| [0, 1, 2].map(|i| c[i].to_bits())))
-                        .collect()
-                };
-                assert_eq!(bits(&out), bits(&expected), "{name}, k = {k}, s = {s}");
+                each(name, &scene, k, s, &state);
                 paths += 1;
-                nonzero += out.iter().flatten().count();
-                specular += (1..k).any(|i| path.specular(i)) as usize;
             }
-            assert!(
-                paths == 400 && nonzero > 400,
-                "{name}: {paths} paths, {nonzero} values"
-            );
-            println!("{name}: {paths} paths, {nonzero} nonzero C*_s, {specular} specular");
+            assert_eq!(paths, per_scene, "{name}: too few paths sampled");
+        }
+    }
+
+    /// The one-walk-per-end evaluation gives exactly (bit for bit) the contributions of retracing
+    /// both subpaths and connecting each strategy, on paths of every length sampled by every
+    /// strategy in every built-in scene (glass, mirrors, shading normals, point and area lights).
+    #[test]
+    fn strategies_equal_connecting_retraced_subpaths() {
+        let (mut walks, mut out) = (Walks::default(), Vec::new());
+        let bits = |c: &[Option<Rgb>]| -> Vec<Option<[u64; 3]>> {
+            c.iter()
+                .map(|c| c.map(|c| [0, 1, 2].map(|i| c[i].to_bits())))
+                .collect()
+        };
+        let mut counts = std::collections::BTreeMap::<String, (usize, usize)>::new();
+        for_sampled_paths((9, 10), 400, |name, scene, k, s, state| {
+            let path = &state.path;
+            path.strategies(scene, &mut walks, &mut out);
+            let expected = strategies_by_connection(path, scene);
+            assert_eq!(bits(&out), bits(&expected), "{name}, k = {k}, s = {s}");
+            let c = counts.entry(name.to_string()).or_default();
+            c.0 += out.iter().flatten().count();
+            c.1 += usize::from((1..k).any(|i| path.specular(i)));
+        });
+        for (name, (nonzero, specular)) in counts {
+            assert!(nonzero > 400, "{name}: {nonzero} values");
+            println!("{name}: {nonzero} nonzero C*_s, {specular} specular");
         }
     }
 
@@ -689,64 +704,48 @@ mod tests {
     /// neighbouring entry, which an index off by one would read, is another number.
     #[test]
     fn walks_give_the_arriving_throughputs() {
-        let mut rng = stream(11, 0);
         let (mut walks, mut out) = (Walks::default(), Vec::new());
         let bits = |c: Option<Rgb>| c.map(|c| [0, 1, 2].map(|i| c[i].to_bits()));
-        for name in builtin::all() {
-            let scene = Scene::new(&builtin::builtin(name).unwrap(), Some((32, 24))).unwrap();
-            let mut sampler = IndependentStream::new(stream(12, 0));
-            let (mut paths, mut read, mut neighbours_differ) = (0, 0, 0);
-            let mut previous: Option<FullPath> = None;
-            for _ in 0..100_000 {
-                if paths == 300 {
-                    break;
-                }
-                let k = 1 + (uniform(&mut rng) * 6.0) as usize;
-                let s = ((uniform(&mut rng) * (k + 2) as f64) as usize).min(k + 1);
-                let mut state = PathState::default();
-                sampler.new_sample();
-                if sample_path(&scene, k, s, &mut sampler, &mut state).is_none() {
-                    continue;
-                }
-                let path = &state.path;
-                let v = &path.vertices;
-                path.strategies(&scene, &mut walks, &mut out);
-                for i in 0..v.len() {
-                    let light =
-                        arriving_throughput(&scene, i + 1, |j| &v[j], TransportMode::Importance);
-                    let camera = arriving_throughput(
-                        &scene,
-                        k - i + 1,
-                        |j| &v[k - j],
-                        TransportMode::Radiance,
-                    );
-                    let (Some(l), Some(c)) =
-                        (walks.light_arriving(v, i), walks.camera_arriving(v, i))
-                    else {
-                        panic!("{name}: the path's own walks refused at vertex {i}");
-                    };
-                    assert_eq!(bits(l), bits(light), "{name}, k = {k}, light side at {i}");
-                    assert_eq!(bits(c), bits(camera), "{name}, k = {k}, camera side at {i}");
-                    read += usize::from(l.is_some()) + usize::from(c.is_some());
-                    if l.is_some()
-                        && i + 1 < v.len()
-                        && bits(Some(walks.light[i + 1].beta)) != bits(l)
-                    {
-                        neighbours_differ += 1;
-                    }
-                }
-                if let Some(other) = &previous
-                    && other.vertices[0].p() != v[0].p()
+        let mut counts = std::collections::BTreeMap::<String, (usize, usize)>::new();
+        let mut previous: Option<FullPath> = None;
+        for_sampled_paths((11, 12), 300, |name, scene, k, _, state| {
+            let path = &state.path;
+            let v = &path.vertices;
+            path.strategies(scene, &mut walks, &mut out);
+            let c = counts.entry(name.to_string()).or_default();
+            for i in 0..v.len() {
+                let light = arriving_throughput(scene, i + 1, |j| &v[j], TransportMode::Importance);
+                let camera =
+                    arriving_throughput(scene, k - i + 1, |j| &v[k - j], TransportMode::Radiance);
+                let (Some(l), Some(cam)) =
+                    (walks.light_arriving(v, i), walks.camera_arriving(v, i))
+                else {
+                    panic!("{name}: the path's own walks refused at vertex {i}");
+                };
+                assert_eq!(bits(l), bits(light), "{name}, k = {k}, light side at {i}");
+                assert_eq!(
+                    bits(cam),
+                    bits(camera),
+                    "{name}, k = {k}, camera side at {i}"
+                );
+                c.0 += usize::from(l.is_some()) + usize::from(cam.is_some());
+                if l.is_some() && i + 1 < v.len() && bits(Some(walks.light[i + 1].beta)) != bits(l)
                 {
-                    let foreign = walks.light_arriving(&other.vertices, 0);
-                    assert!(foreign.is_none(), "{name}: walks of another path read");
+                    c.1 += 1;
                 }
-                previous = Some(path.clone());
-                paths += 1;
             }
+            if let Some(other) = &previous
+                && other.vertices[0].p() != v[0].p()
+            {
+                let foreign = walks.light_arriving(&other.vertices, 0);
+                assert!(foreign.is_none(), "{name}: walks of another path read");
+            }
+            previous = Some(path.clone());
+        });
+        for (name, (read, neighbours_differ)) in counts {
             assert!(
-                paths == 300 && read > 600 && neighbours_differ > 100,
-                "{name}: {paths} paths, {read} throughputs read, {neighbours_differ} neighbours differ"
+                read > 600 && neighbours_differ > 100,
+                "{name}: {read} throughputs read, {neighbours_differ} neighbours differ"
             );
         }
     }
