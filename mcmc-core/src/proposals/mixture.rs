@@ -26,21 +26,24 @@ use smallvec::SmallVec;
 /// One number per component, on the stack for mixtures of up to 16 (a proposal's selection
 /// probabilities and density terms are computed at every step; on the heap they cost an
 /// allocation each).
-type PerComponent = SmallVec<[f64; 16]>;
+type PerComponent = SmallVec<[f64; INLINE_COMPONENTS]>;
+
+/// Components whose numbers stay on the stack ([`PerComponent`], [`Scratch`]).
+const INLINE_COMPONENTS: usize = 16;
 
 /// Room for one number per component, filled by [`Mixture::suited`]: on the stack for mixtures
 /// of up to 16 components, on the heap beyond. (The selection weights are computed twice at
 /// every step; returned as a small vector they cost a capacity check per component and a copy
 /// of the whole vector out of the call.)
 struct Scratch {
-    inline: [f64; 16],
+    inline: [f64; INLINE_COMPONENTS],
     heap: Vec<f64>,
 }
 
 impl Scratch {
     fn new() -> Self {
         Self {
-            inline: [0.0; 16],
+            inline: [0.0; INLINE_COMPONENTS],
             heap: Vec::new(),
         }
     }
