@@ -16,8 +16,9 @@
 # Both builds run the same estimators: roulette, the Metropolis methods' direct pass and the Sobol
 # sampler, where a build has them, are off (below; their gains are measured at equal time).
 # Prints, per scene and algorithm, the median render time of each build, the speed-up
-# (old time / new time, > 1 is faster) and the peak resident memory of each build; a final line
-# gives the geometric mean of the speed-ups.
+# (old time / new time, > 1 is faster) and the peak resident memory of each build; then per
+# method and per scene the geometric mean of the speed-ups and how many cells reach GOAL (default
+# 2.5×, issue 17's); a final line gives the geometric mean of all the speed-ups.
 set -euo pipefail
 rev=$1
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -103,8 +104,22 @@ for scene in $scenes; do
     ratio=$(awk -v a="$to" -v b="$tn" 'BEGIN { printf "%.3f", a / b }')
     printf '%-12s %-7s %9.2f %9.2f %7.2f× %10.1f %10.1f\n' "$name" "$algo" "$to" "$tn" "$ratio" \
       "$(awk -v m="$mo" 'BEGIN { print m / 1024 }')" "$(awk -v m="$mn" 'BEGIN { print m / 1024 }')"
+    echo "$name $algo $ratio" >> "$out/ratios"
     logsum=$(add_log "$logsum" "$ratio")
     count=$((count + 1))
   done
 done
+# Per method and per scene: the geometric mean of their cells, and the cells at or above GOAL
+# (default 2.5, issue 17's).
+awk -v goal="${GOAL:-2.5}" '
+  { la[$2] += log($3); na[$2]++; ls[$1] += log($3); ns[$1]++; if ($3 >= goal) { met++; hit[$2]++ } }
+  !($2 in seen_a) { seen_a[$2] = 1; order_a[++ka] = $2 }
+  !($1 in seen_s) { seen_s[$1] = 1; order_s[++ks] = $1 }
+  END {
+    for (i = 1; i <= ka; i++) { a = order_a[i]
+      printf "method %-7s geometric mean %6.3f× over %d scenes, %d at or above %.2f×\n", a, exp(la[a] / na[a]), na[a], hit[a] + 0, goal }
+    for (i = 1; i <= ks; i++) { c = order_s[i]
+      printf "scene  %-12s geometric mean %6.3f× over %d methods\n", c, exp(ls[c] / ns[c]), ns[c] }
+    printf "cells at or above %.2f×: %d of %d\n", goal, met + 0, NR
+  }' "$out/ratios"
 echo "geometric mean speed-up over $count runs: $(geomean "$logsum" "$count")×"
