@@ -13,7 +13,7 @@ pub use connect::{
     Connection, End, EndPairs, GRAZING_COSINE, connect, connect_unoccluded, geometry, join,
     unoccluded,
 };
-pub use mis::{MisHeuristic, mis_weight};
+pub use mis::{DELTA_DENSITY, MisHeuristic, mis_weight};
 pub use subpath::Subpath;
 pub use vertex::{Vertex, VertexKind};
 pub use walk::{

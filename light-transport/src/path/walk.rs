@@ -4,6 +4,7 @@
 //! a subpath from that subpath's `b`-th vertex block. Subpaths are therefore deterministic
 //! functions of the stream, vertex by vertex.
 
+use super::mis::DELTA_DENSITY;
 use super::subpath::Subpath;
 use super::vertex::{Vertex, VertexKind};
 use crate::bsdf::TransportMode;
@@ -390,10 +391,11 @@ fn random_walk<S: SampleStream>(
         if !beta.is_finite() {
             break;
         }
-        // Delta directions have no density: both densities are 0 (remapped to 1 in the MIS ratios,
-        // and this vertex is marked so no strategy connects through it).
+        // A delta direction has no density; both directions are given the solid-angle factor
+        // [`DELTA_DENSITY`], so that the area densities keep their geometric factors (module
+        // docs of [`crate::path::mis`]). The vertex is marked: no strategy connects through it.
         let (pdf_fwd, pdf_rev) = if bs.delta {
-            (0.0, 0.0)
+            (DELTA_DENSITY, DELTA_DENSITY)
         } else {
             // `bsdf.pdf(bs.wi, vert.wo)`, bit for bit.
             (bs.pdf, bsdf.pdf_local(pair.reversed()))

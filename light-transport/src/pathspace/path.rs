@@ -10,7 +10,7 @@
 
 use crate::bsdf::TransportMode;
 use crate::math::DVec3;
-use crate::path::{End, Vertex, VertexKind, join};
+use crate::path::{DELTA_DENSITY, End, Vertex, VertexKind, join};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 
@@ -567,11 +567,7 @@ fn walk_on<'a>(
         if !beta.is_finite() {
             return i + 1;
         }
-        out[i + 1].pdf_fwd = if v.delta {
-            0.0
-        } else {
-            v.to_area(pdf, next, scene)
-        };
+        out[i + 1].pdf_fwd = v.to_area(if v.delta { DELTA_DENSITY } else { pdf }, next, scene);
         prev = v;
     }
     n
