@@ -49,6 +49,18 @@ fn describe(scene: &Scene, state: &PathState) -> String {
     out
 }
 
+/// The bootstrap's sample of key `key` for every length (as the driver draws it when lengths
+/// share keys), each evaluated and handed to `each`.
+fn each_length(
+    scene: &Scene,
+    key: u64,
+    state: &mut PathState,
+    each: impl FnMut(usize, &PathState),
+) {
+    let edges = (MIN_EDGES, MAX_EDGES);
+    NewPath::sample_every_length(scene, ImportanceKind::Luminance, edges, key, state, each);
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let scene_arg = args.next().unwrap_or_else(|| "pool".into());
@@ -68,41 +80,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut state = PathState::default();
     for i in 0..samples {
         let key = mcmc_core::rng::mix64(offset + i);
-        NewPath::sample_every_length(
-            &scene,
-            ImportanceKind::Luminance,
-            (MIN_EDGES, MAX_EDGES),
-            key,
-            &mut state,
-            |k, st| {
-                let w = (k + 1) as f64 * st.contribution.importance;
-                if w > 0.0 {
-                    sum[k] += w;
-                    let t = &mut top[k];
-                    t.push((w, key));
-                    t.sort_by(|a, b| b.0.total_cmp(&a.0));
-                    t.truncate(TOP);
-                }
-            },
-        );
+        each_length(&scene, key, &mut state, |k, st| {
+            let w = (k + 1) as f64 * st.contribution.importance;
+            if w > 0.0 {
+                sum[k] += w;
+                let t = &mut top[k];
+                t.push((w, key));
+                t.sort_by(|a, b| b.0.total_cmp(&a.0));
+                t.truncate(TOP);
+            }
+        });
     }
     for k in MIN_EDGES..=MAX_EDGES {
         let b = sum[k] / samples as f64;
         println!("k = {k}: b_k = {b:.4e}");
         for &(w, key) in &top[k] {
             let mut found = None;
-            NewPath::sample_every_length(
-                &scene,
-                ImportanceKind::Luminance,
-                (MIN_EDGES, MAX_EDGES),
-                key,
-                &mut state,
-                |kk, st| {
-                    if kk == k {
-                        found = Some(describe(&scene, st));
-                    }
-                },
-            );
+            each_length(&scene, key, &mut state, |kk, st| {
+                if kk == k {
+                    found = Some(describe(&scene, st));
+                }
+            });
             println!(
                 "   weight {w:.3e} = {:.1}% of the length's sum{}",
                 100.0 * w / sum[k],
