@@ -9,11 +9,10 @@
 //! key offset 0), 256×256, at most 9 edges (`--max-depth 8`), paths of 3 edges and more (the
 //! chains' share when direct lighting is rendered apart).
 
-use light_transport::metropolis::ImportanceKind;
-use light_transport::pathspace::{NewPath, PathState};
+use light_transport::metropolis::{DIRECT_EDGES, DirectApart, Method};
+use light_transport::pathspace::{Mutations, PathMlt, PathState};
 use light_transport::scene::{Scene, builtin, pbrt};
 
-const MIN_EDGES: usize = 3;
 const MAX_EDGES: usize = 9;
 const TOP: usize = 3;
 
@@ -49,18 +48,6 @@ fn describe(scene: &Scene, state: &PathState) -> String {
     out
 }
 
-/// The bootstrap's sample of key `key` for every length (as the driver draws it when lengths
-/// share keys), each evaluated and handed to `each`.
-fn each_length(
-    scene: &Scene,
-    key: u64,
-    state: &mut PathState,
-    each: impl FnMut(usize, &PathState),
-) {
-    let edges = (MIN_EDGES, MAX_EDGES);
-    NewPath::sample_every_length(scene, ImportanceKind::Luminance, edges, key, state, each);
-}
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let scene_arg = args.next().unwrap_or_else(|| "pool".into());
@@ -77,34 +64,32 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let scene = Scene::new(&desc, Some((256, 256)))?;
     let mut sum = [0.0f64; MAX_EDGES + 1];
     let mut top: Vec<Vec<(f64, u64)>> = vec![Vec::new(); MAX_EDGES + 1];
-    let mut state = PathState::default();
+    // The method's own bootstrap: its chains' lengths (direct lighting apart), its weights.
+    let mlt = PathMlt::new(Mutations::new(MAX_EDGES))?.without_direct();
+    let mut weights = vec![(0, 0.0); mlt.groups()];
     for i in 0..samples {
         let key = mcmc_core::rng::mix64(offset + i);
-        each_length(&scene, key, &mut state, |k, st| {
-            let w = (k + 1) as f64 * st.contribution.importance;
-            if w > 0.0 {
+        mlt.independent_all(&scene, key, &mut weights);
+        for (g, &(_, w)) in weights.iter().enumerate() {
+            let k = g + 1;
+            if w > 0.0 && k <= MAX_EDGES {
                 sum[k] += w;
                 let t = &mut top[k];
                 t.push((w, key));
                 t.sort_by(|a, b| b.0.total_cmp(&a.0));
                 t.truncate(TOP);
             }
-        });
+        }
     }
-    for k in MIN_EDGES..=MAX_EDGES {
+    for k in DIRECT_EDGES + 1..=MAX_EDGES {
         let b = sum[k] / samples as f64;
         println!("k = {k}: b_k = {b:.4e}");
         for &(w, key) in &top[k] {
-            let mut found = None;
-            each_length(&scene, key, &mut state, |kk, st| {
-                if kk == k {
-                    found = Some(describe(&scene, st));
-                }
-            });
+            let (state, _) = mlt.independent(&scene, k - 1, key);
             println!(
                 "   weight {w:.3e} = {:.1}% of the length's sum{}",
                 100.0 * w / sum[k],
-                found.unwrap_or_default()
+                describe(&scene, &state)
             );
         }
     }
